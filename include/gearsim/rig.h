@@ -1,0 +1,152 @@
+/*
+ * gearsim/rig.h - a block between two shafts: what firmware, HIL rigs and
+ * measurements step (docs/physics.md section 11).
+ *
+ * Base side (the pinion for the rack rig): speed-driven (a drive holds the
+ * measured speed, the rig returns the torque it must apply) or torque-driven
+ * (a motor torque acts on base_inertia, the rig returns the speeds).
+ * Driven side: the follower shaft with follower_inertia (kg*m^2), or the rack
+ * with rack_mass (kg), under an external load plus rig-level Coulomb friction
+ * and a constant offset. "Driven-side" quantities are N*m, rad/s and rad for
+ * the gear rig and N, m/s and m for the rack rig.
+ *
+ * Without backlash the mesh is rigid and the rig has one degree of freedom;
+ * with backlash the driven side has its own speed and the contact is
+ * integrated implicitly (backward Euler on the contact, a fixed number of
+ * sub-steps), so stiff contact stays bounded at any dt.
+ */
+#ifndef GEARSIM_RIG_H
+#define GEARSIM_RIG_H
+
+#include "gearsim/simple_gear.h"
+#include "gearsim/rack_pinion.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define gs_rig_init_gear GS_PRECISION_NAME(gs_rig_init_gear)
+#define gs_rig_init_rack GS_PRECISION_NAME(gs_rig_init_rack)
+
+#define GS_MAX_SUBSTEPS 64
+
+typedef enum {
+    GS_BASE_SPEED_DRIVEN = 0,
+    GS_BASE_TORQUE_DRIVEN = 1
+} gs_base_drive;
+
+typedef enum {
+    GS_TEMPERATURE_FROM_MODEL = 0,  /* thermal state (5.1) */
+    GS_TEMPERATURE_FROM_INPUT = 1   /* measured_temperature_K overrides the state */
+} gs_temperature_source;
+
+typedef enum {
+    GS_RIG_SIMPLE_GEAR = 0,
+    GS_RIG_RACK_PINION = 1
+} gs_rig_block;
+
+typedef struct {
+    gs_real dt_s;                          /* fixed step (> 0), default 1e-3 */
+    gs_base_drive base_drive;              /* default speed-driven */
+    gs_real base_inertia_kg_m2;            /* torque-driven: > 0; speed-driven: >= 0 and adds J_B*alpha_B to base_torque; default 0 */
+    gs_real initial_base_speed_rad_s;      /* torque-driven start speed, default 0 */
+    gs_real driven_inertia;                /* follower_inertia kg*m^2 or rack_mass kg (> 0), default 0.05 */
+    gs_real load_coulomb_friction;         /* N*m or N (>= 0), default 0 */
+    gs_real load_coulomb_speed_threshold;  /* rad/s or m/s (> 0), tanh(4 w/w_th) smoothing, default 1e-3 */
+    gs_real load_offset;                   /* N*m or N, constant bias on the driven side, default 0 */
+    int heat_path;                         /* 1: Q_H = (T_amb - T)/R_th; 0: adiabatic (default 0) */
+    gs_real thermal_resistance_K_W;        /* R_th (> 0 when heat_path), default 2 */
+    gs_temperature_source temperature_source; /* default from model */
+    gs_real accel_filter_time_constant_s;  /* speed-driven: first-order low-pass on the
+                                              backward-difference base acceleration (>= 0; 0 = raw), default 0 */
+    int contact_substeps;                  /* backlash: sub-steps per step, 1..GS_MAX_SUBSTEPS, 0 = choose at init */
+} gs_rig_params;
+
+/* Per-step inputs. All fields are gs_real, so an array of N inputs is an
+ * N x 5 array of reals. Unused fields are ignored. */
+typedef struct {
+    gs_real base_speed_rad_s;       /* speed-driven: held base (pinion) speed */
+    gs_real base_torque_Nm;         /* torque-driven: motor torque on the base inertia */
+    gs_real load;                   /* external load on the driven side, + along + follower rotation / rack direction */
+    gs_real ambient_temperature_K;  /* used when heat_path */
+    gs_real measured_temperature_K; /* used when temperature_source = FROM_INPUT */
+} gs_rig_input;
+
+#define GS_RIG_INPUT_FIELDS 5
+
+/* Per-step outputs, all gs_real (an N x 15 array of reals). Torques, powers
+ * and the contact force are means over the step's sub-steps; speeds, angles,
+ * temperature and positions are values at the end of the step. */
+typedef struct {
+    gs_real base_torque_Nm;         /* torque the drive applies to the base shaft (speed-driven:
+                                       base_port_torque + J_B*alpha_B; torque-driven: the input) */
+    gs_real base_speed_rad_s;
+    gs_real base_angle_rad;
+    gs_real driven_speed;           /* follower rad/s or rack m/s */
+    gs_real driven_position;        /* follower rad or rack m */
+    gs_real base_port_torque_Nm;    /* tau_B: what the base shaft applies to the block */
+    gs_real driven_port_torque;     /* tau_F (N*m) or F_R (N): what the driven side applies to the block */
+    gs_real mesh_loss_power_W;      /* meshing loss, >= 0 */
+    gs_real loss_power_W;           /* mesh + viscous + contact damping, >= 0 */
+    gs_real port_power_W;           /* power into the block through both ports */
+    gs_real contact_energy_J;       /* energy stored in the backlash spring at the end of the step */
+    gs_real temperature_K;          /* block temperature at the end of the step (state, or the input) */
+    gs_real backlash_position_m;
+    gs_real contact_force_N;
+    gs_real driven_acceleration;    /* follower rad/s^2 or rack m/s^2 */
+} gs_rig_output;
+
+#define GS_RIG_OUTPUT_FIELDS 15
+
+typedef struct {
+    gs_mesh_ mesh;
+    gs_rig_block block;
+    /* constants */
+    gs_real dt;
+    gs_base_drive base_drive;
+    gs_real base_inertia;
+    gs_real initial_base_speed;
+    gs_real driven_inertia;
+    gs_real load_coulomb;
+    gs_real inv_load_speed_threshold;
+    gs_real load_offset;
+    int heat_path;
+    gs_real inv_thermal_resistance;
+    gs_temperature_source temperature_source;
+    gs_real accel_gain;            /* dt/(tau + dt) */
+    int substeps;
+    gs_real inv_eff_mass_contact;  /* 1/m_eff at the pitch line, 1/kg */
+    /* state */
+    int started;
+    gs_real base_speed;
+    gs_real base_angle;
+    gs_real driven_speed;
+    gs_real driven_position;
+    gs_real previous_base_speed_input;
+    gs_real base_acceleration;
+} gs_rig;
+
+gs_rig_params gs_rig_params_default(void);
+
+/* Validate the block and rig parameters and fill rig. err names the failing
+ * parameter (block names as in docs/physics.md; rig names e.g.
+ * "follower_inertia", "rack_mass", "dt"). Never allocates. */
+gs_status gs_rig_init_gear(gs_rig *rig, const gs_simple_gear_params *gear,
+                           const gs_rig_params *params, gs_error *err);
+gs_status gs_rig_init_rack(gs_rig *rig, const gs_rack_pinion_params *rack,
+                           const gs_rig_params *params, gs_error *err);
+
+/* Back to the initial state (speeds, angles, temperature, backlash). */
+void gs_rig_reset(gs_rig *rig);
+
+/* One fixed step of dt_s. Cannot fail; constant cost per instance. Inputs
+ * must be finite; the outputs are then finite. */
+void gs_rig_step(gs_rig *rig, const gs_rig_input *in, gs_rig_output *out);
+
+/* n steps over caller-owned arrays; bit-identical to n calls of gs_rig_step. */
+void gs_rig_run(gs_rig *rig, size_t n, const gs_rig_input *in, gs_rig_output *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* GEARSIM_RIG_H */

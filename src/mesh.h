@@ -1,0 +1,62 @@
+/* mesh.h - the transmission shared by both blocks (internal).
+ *
+ * Both blocks are a mesh omega_B = ratio*omega_F between a base shaft and a
+ * follower (a shaft, or the rack with "radius" 1). This header gathers the
+ * meshing-loss laws (physics.md 2, 6), the hard-stop contact (4), the thermal
+ * mass (5) and the block-level step, so that each exists once. */
+#ifndef GS_MESH_H
+#define GS_MESH_H
+
+#include "gearsim/types.h"
+
+/* Mesh-loss quantities that depend only on the temperature, evaluated once
+ * per step. */
+typedef struct {
+    gs_real loss_forward;   /* L_fd = 1 - eta       (follower driving) */
+    gs_real loss_backward;  /* L_bd = 1/eta - 1     (base driving) */
+    gs_real eta_of_load[GS_TABLE_MAX]; /* 2-D table collapsed at the temperature */
+} gs_loss_ctx_;
+
+/* Common mesh set-up (the block inits call these after their own checks). */
+gs_status gs_mesh_set_backlash(gs_mesh_ *m, const gs_backlash_params *p, gs_real base_radius,
+                               gs_real follower_radius, gs_error *err);
+gs_status gs_mesh_set_thermal(gs_mesh_ *m, gs_real thermal_mass, gs_real initial_temperature,
+                              gs_error *err);
+void gs_mesh_reset(gs_mesh_ *m);
+
+/* Meshing loss (mesh_loss.c). */
+void gs_mesh_loss_prepare(const gs_mesh_ *m, gs_real temperature, gs_loss_ctx_ *ctx);
+/* tau_mesh (follower-referred) for net follower torque T and speed w. */
+gs_real gs_mesh_loss_torque(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T, gs_real w);
+/* tau_mesh ~ m0 + m1*T near (T, w): used by the implicit torque-driven step. */
+void gs_mesh_loss_linearize(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T, gs_real w,
+                            gs_real *m0, gs_real *m1);
+
+/* Hard-stop contact (hard_stop.c). x: backlash position (m), u: relative
+ * tooth velocity (m/s). */
+gs_real gs_contact_force(const gs_mesh_ *m, gs_real x, gs_real u, gs_real *f_spring);
+/* Energy stored in the contact spring at x (J). */
+gs_real gs_contact_energy(const gs_mesh_ *m, gs_real x);
+/* Backward-Euler contact over one sub-step h: finds u with
+ * u = u_free - h*inv_mass*f(x + h*u, u); returns u and the force. Handles the
+ * static-contact lock when enabled. Fixed cost. */
+gs_real gs_contact_solve(gs_mesh_ *m, gs_real x, gs_real u_free, gs_real h, gs_real inv_mass,
+                         gs_real *force, gs_real *f_spring);
+
+/* Thermal mass: explicit heat flow q_W, or an ambient path through
+ * conductance g_W_K treated implicitly (stable for any thermal mass). */
+void gs_mesh_thermal_step(gs_mesh_ *m, gs_real dt, gs_real loss_W, gs_real q_W,
+                          gs_real ambient_K, gs_real conductance_W_K);
+
+/* Block-level step shared by both blocks: rigid (form A) or backlash (form C). */
+typedef struct {
+    gs_real base_speed, follower_speed, follower_torque, heat_flow, temperature;
+    int use_temperature;
+} gs_mesh_in_;
+typedef struct {
+    gs_real base_torque, follower_torque, follower_speed, loss_torque, mesh_loss_power,
+        loss_power, temperature, position, contact_force;
+} gs_mesh_out_;
+void gs_mesh_block_step(gs_mesh_ *m, gs_real dt, const gs_mesh_in_ *in, gs_mesh_out_ *out);
+
+#endif /* GS_MESH_H */

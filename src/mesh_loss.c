@@ -1,0 +1,94 @@
+/* mesh_loss.c - meshing-loss laws (physics.md 2.1-2.7, 6.4).
+ * The loss torque is follower-referred and has the sign of the follower speed
+ * for the passive laws, so tau_mesh*omega_F >= 0. */
+#include "mesh.h"
+#include "gs_math.h"
+#include "table.h"
+
+void gs_mesh_loss_prepare(const gs_mesh_ *m, gs_real temperature, gs_loss_ctx_ *ctx)
+{
+    gs_real eta = m->eta;
+    switch (m->friction) {
+    case GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY:
+        eta = gs_interp1(m->eta_of_T.x, m->eta_of_T.y, m->eta_of_T.n, temperature);
+        break;
+    case GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY:
+        /* Bilinear = linear in temperature per load column, then in load. */
+        for (int j = 0; j < m->eta_of_T_load.ny; ++j) {
+            gs_real column[GS_TABLE_MAX];
+            for (int i = 0; i < m->eta_of_T_load.nx; ++i) {
+                column[i] = m->eta_of_T_load.z[i][j];
+            }
+            ctx->eta_of_load[j] = gs_interp1(m->eta_of_T_load.x, column, m->eta_of_T_load.nx,
+                                             temperature);
+        }
+        break;
+    case GS_FRICTION_NONE:
+    case GS_FRICTION_CONSTANT_EFFICIENCY:
+    case GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY:
+        break;
+    }
+    ctx->loss_forward = GS_R(1.0) - eta;
+    ctx->loss_backward = GS_R(1.0) / eta - GS_R(1.0);
+}
+
+/* Loss factor c with tau_mesh = T*c of the power-smoothed efficiency laws. */
+static gs_real efficiency_loss_factor(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T,
+                                      gs_real w)
+{
+    const gs_real t = gs_tanh(GS_R(4.0) * T * w * m->inv_power_threshold);
+    if (m->smoothing == GS_SMOOTHING_SIMSCAPE) {
+        return GS_R(0.5) * ((ctx->loss_forward + ctx->loss_backward) * t + ctx->loss_forward
+                            - ctx->loss_backward);
+    }
+    return t * (t >= GS_R(0.0) ? ctx->loss_forward : ctx->loss_backward);
+}
+
+/* Coulomb-type laws (2.6, 2.7): magnitude C0 + slope*|T|, smoothed on speed. */
+static gs_real coulomb_slope(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T)
+{
+    if (m->friction == GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY) {
+        return m->load_slope;
+    }
+    const gs_real load = gs_abs(T) * m->base_load_scale;
+    const gs_real eta = gs_interp1(m->eta_of_T_load.y, ctx->eta_of_load, m->eta_of_T_load.ny, load);
+    return GS_R(1.0) / eta - GS_R(1.0);
+}
+
+gs_real gs_mesh_loss_torque(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T, gs_real w)
+{
+    switch (m->friction) {
+    case GS_FRICTION_NONE:
+        return GS_R(0.0);
+    case GS_FRICTION_CONSTANT_EFFICIENCY:
+    case GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY:
+        return T * efficiency_loss_factor(m, ctx, T, w);
+    case GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY:
+    case GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY:
+        return (m->coulomb_idle + coulomb_slope(m, ctx, T) * gs_abs(T))
+               * gs_tanh(GS_R(4.0) * w * m->inv_speed_threshold);
+    }
+    return GS_R(0.0);
+}
+
+void gs_mesh_loss_linearize(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T, gs_real w,
+                            gs_real *m0, gs_real *m1)
+{
+    *m0 = GS_R(0.0);
+    *m1 = GS_R(0.0);
+    switch (m->friction) {
+    case GS_FRICTION_NONE:
+        break;
+    case GS_FRICTION_CONSTANT_EFFICIENCY:
+    case GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY:
+        *m1 = efficiency_loss_factor(m, ctx, T, w);
+        break;
+    case GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY:
+    case GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY: {
+        const gs_real th = gs_tanh(GS_R(4.0) * w * m->inv_speed_threshold);
+        *m0 = m->coulomb_idle * th;
+        *m1 = coulomb_slope(m, ctx, T) * gs_sign(T) * th;
+        break;
+    }
+    }
+}

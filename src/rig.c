@@ -1,0 +1,371 @@
+/* rig.c - a block between a driven base shaft and an inertia (physics.md 11).
+ *
+ * Three step paths share the mesh of mesh.h:
+ *  - rigid mesh, speed-driven base: causal form A; the follower's inertia
+ *    torque uses the filtered backward-difference base acceleration;
+ *  - rigid mesh, torque-driven base: one degree of freedom; the meshing loss
+ *    is linearised around the last follower torque (two fixed passes) and
+ *    the viscous terms are implicit;
+ *  - backlash: the follower (and a torque-driven base) carry their own
+ *    speeds; the contact is integrated by backward Euler in a fixed number
+ *    of sub-steps, viscous terms implicit, the meshing loss and the load's
+ *    Coulomb friction explicit at the start of each sub-step. */
+#include <string.h>
+
+#include "gearsim/rig.h"
+#include "blocks.h"
+#include "gs_math.h"
+#include "mesh.h"
+#include "validate.h"
+
+#define LINEARISATION_PASSES 2
+#define AUTO_SUBSTEPS_MAX 16
+
+gs_rig_params gs_rig_params_default(void)
+{
+    gs_rig_params p;
+    memset(&p, 0, sizeof p);
+    p.dt_s = GS_R(1e-3);
+    p.base_drive = GS_BASE_SPEED_DRIVEN;
+    p.base_inertia_kg_m2 = GS_R(0.0);
+    p.initial_base_speed_rad_s = GS_R(0.0);
+    p.driven_inertia = GS_R(0.05);
+    p.load_coulomb_friction = GS_R(0.0);
+    p.load_coulomb_speed_threshold = GS_R(1e-3);
+    p.load_offset = GS_R(0.0);
+    p.heat_path = 0;
+    p.thermal_resistance_K_W = GS_R(2.0);
+    p.temperature_source = GS_TEMPERATURE_FROM_MODEL;
+    p.accel_filter_time_constant_s = GS_R(0.0);
+    p.contact_substeps = 0;
+    return p;
+}
+
+static gs_status check_rig(const gs_rig_params *p, gs_rig_block block, gs_error *err)
+{
+    gs_status s;
+    if (!gs_is_finite(p->dt_s) || !(p->dt_s > GS_R(0.0))) {
+        return gs_fail(err, GS_E_STEP_SIZE, "dt");
+    }
+    switch (p->base_drive) {
+    case GS_BASE_SPEED_DRIVEN:
+        s = gs_check_nonnegative(err, p->base_inertia_kg_m2, "base_inertia");
+        break;
+    case GS_BASE_TORQUE_DRIVEN:
+        s = gs_check_positive(err, p->base_inertia_kg_m2, "base_inertia");
+        break;
+    default:
+        return gs_fail(err, GS_E_OPTION, "base_drive");
+    }
+    if (s != GS_OK) {
+        return s;
+    }
+    switch (p->temperature_source) {
+    case GS_TEMPERATURE_FROM_MODEL:
+    case GS_TEMPERATURE_FROM_INPUT:
+        break;
+    default:
+        return gs_fail(err, GS_E_OPTION, "temperature_source");
+    }
+    const char *driven_name = block == GS_RIG_SIMPLE_GEAR ? "follower_inertia" : "rack_mass";
+    if ((s = gs_check_finite(err, p->initial_base_speed_rad_s, "initial_base_speed")) != GS_OK ||
+        (s = gs_check_positive(err, p->driven_inertia, driven_name)) != GS_OK ||
+        (s = gs_check_nonnegative(err, p->load_coulomb_friction, "load_coulomb_friction")) != GS_OK ||
+        (s = gs_check_positive(err, p->load_coulomb_speed_threshold, "load_coulomb_speed_threshold")) != GS_OK ||
+        (s = gs_check_finite(err, p->load_offset, "load_offset")) != GS_OK ||
+        (s = gs_check_nonnegative(err, p->accel_filter_time_constant_s, "accel_filter_time_constant")) != GS_OK) {
+        return s;
+    }
+    if (p->heat_path && (s = gs_check_positive(err, p->thermal_resistance_K_W, "thermal_resistance")) != GS_OK) {
+        return s;
+    }
+    if (p->contact_substeps < 0 || p->contact_substeps > GS_MAX_SUBSTEPS) {
+        return gs_fail(err, GS_E_SUBSTEPS, "contact_substeps");
+    }
+    return GS_OK;
+}
+
+/* 1/m_eff at the pitch line for sub-step h, with the viscous terms implicit. */
+static gs_real contact_inverse_mass(const gs_rig *r, gs_real h)
+{
+    const gs_mesh_ *m = &r->mesh;
+    gs_real inv = m->follower_radius * m->follower_radius / (r->driven_inertia + h * m->mu_follower);
+    if (r->base_drive == GS_BASE_TORQUE_DRIVEN) {
+        inv += m->base_radius * m->base_radius / (r->base_inertia + h * m->mu_base);
+    }
+    return inv;
+}
+
+/* Smallest count with (h*omega_n)^2 <= 0.25, i.e. h*omega_n <= 0.5, capped:
+ * backward Euler is stable at any count; this only buys accuracy. */
+static int automatic_substeps(const gs_rig *r)
+{
+    const gs_real k_over_m = r->mesh.stiffness * contact_inverse_mass(r, r->dt);
+    int n = 1;
+    while (n < AUTO_SUBSTEPS_MAX) {
+        const gs_real h = r->dt / (gs_real)n;
+        if (h * h * k_over_m <= GS_R(0.25)) {
+            break;
+        }
+        ++n;
+    }
+    return n;
+}
+
+static gs_status rig_setup(gs_rig *rig, const gs_mesh_ *mesh, gs_rig_block block,
+                           const gs_rig_params *p, gs_error *err)
+{
+    gs_status s = check_rig(p, block, err);
+    if (s != GS_OK) {
+        return s;
+    }
+    gs_rig r;
+    memset(&r, 0, sizeof r);
+    r.mesh = *mesh;
+    r.block = block;
+    r.dt = p->dt_s;
+    r.base_drive = p->base_drive;
+    r.base_inertia = p->base_inertia_kg_m2;
+    r.initial_base_speed = p->initial_base_speed_rad_s;
+    r.driven_inertia = p->driven_inertia;
+    r.load_coulomb = p->load_coulomb_friction;
+    r.inv_load_speed_threshold = GS_R(1.0) / p->load_coulomb_speed_threshold;
+    r.load_offset = p->load_offset;
+    r.heat_path = p->heat_path ? 1 : 0;
+    r.inv_thermal_resistance = r.heat_path ? GS_R(1.0) / p->thermal_resistance_K_W : GS_R(0.0);
+    r.temperature_source = p->temperature_source;
+    r.accel_gain = p->dt_s / (p->accel_filter_time_constant_s + p->dt_s);
+    r.substeps = 1;
+    if (r.mesh.backlash) {
+        r.substeps = p->contact_substeps > 0 ? p->contact_substeps : automatic_substeps(&r);
+        r.inv_eff_mass_contact = contact_inverse_mass(&r, r.dt / (gs_real)r.substeps);
+    }
+    gs_rig_reset(&r);
+    *rig = r;
+    gs_error_clear(err);
+    return GS_OK;
+}
+
+gs_status gs_rig_init_gear(gs_rig *rig, const gs_simple_gear_params *gear,
+                           const gs_rig_params *params, gs_error *err)
+{
+    if (rig == NULL || gear == NULL || params == NULL) {
+        return gs_fail(err, GS_E_NULL, rig == NULL ? "rig" : (gear == NULL ? "gear" : "params"));
+    }
+    gs_mesh_ mesh;
+    const gs_status s = gs_simple_gear_mesh(&mesh, gear, err);
+    return s != GS_OK ? s : rig_setup(rig, &mesh, GS_RIG_SIMPLE_GEAR, params, err);
+}
+
+gs_status gs_rig_init_rack(gs_rig *rig, const gs_rack_pinion_params *rack,
+                           const gs_rig_params *params, gs_error *err)
+{
+    if (rig == NULL || rack == NULL || params == NULL) {
+        return gs_fail(err, GS_E_NULL, rig == NULL ? "rig" : (rack == NULL ? "rack" : "params"));
+    }
+    gs_mesh_ mesh;
+    const gs_status s = gs_rack_pinion_mesh(&mesh, rack, err);
+    return s != GS_OK ? s : rig_setup(rig, &mesh, GS_RIG_RACK_PINION, params, err);
+}
+
+void gs_rig_reset(gs_rig *rig)
+{
+    gs_mesh_reset(&rig->mesh);
+    rig->started = 0;
+    rig->base_speed = rig->base_drive == GS_BASE_TORQUE_DRIVEN ? rig->initial_base_speed : GS_R(0.0);
+    rig->driven_speed = rig->mesh.inv_ratio * rig->base_speed;
+    rig->base_angle = GS_R(0.0);
+    rig->driven_position = GS_R(0.0);
+    rig->previous_base_speed_input = GS_R(0.0);
+    rig->base_acceleration = GS_R(0.0);
+}
+
+/* External torque on the driven side: load, offset and smoothed Coulomb friction. */
+static gs_real driven_external(const gs_rig *r, gs_real load, gs_real w_f)
+{
+    return load + r->load_offset
+           - r->load_coulomb * gs_tanh(GS_R(4.0) * w_f * r->inv_load_speed_threshold);
+}
+
+static void rigid_speed_driven(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
+                               gs_rig_output *out)
+{
+    gs_mesh_ *m = &r->mesh;
+    const gs_real w_b = in->base_speed_rad_s;
+    const gs_real alpha_b = r->base_acceleration;
+    const gs_real w_f = m->inv_ratio * w_b;
+    const gs_real a_f = m->inv_ratio * alpha_b;
+    const gs_real tau_f = driven_external(r, in->load, w_f) - r->driven_inertia * a_f;
+    const gs_real t_f = tau_f - m->mu_follower * w_f;
+    const gs_real tau_mesh = gs_mesh_loss_torque(m, ctx, t_f, w_f);
+    const gs_real tau_b = m->mu_base * w_b + m->inv_ratio * (tau_mesh - t_f);
+    m->last_follower_torque = t_f;
+    r->base_speed = w_b;
+    r->driven_speed = w_f;
+    out->base_torque_Nm = tau_b + r->base_inertia * alpha_b;
+    out->base_port_torque_Nm = tau_b;
+    out->driven_port_torque = tau_f;
+    out->driven_acceleration = a_f;
+    out->mesh_loss_power_W = tau_mesh * w_f;
+    out->loss_power_W = out->mesh_loss_power_W + m->mu_base * w_b * w_b + m->mu_follower * w_f * w_f;
+    out->port_power_W = tau_b * w_b + tau_f * w_f;
+}
+
+static void rigid_torque_driven(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
+                                gs_rig_output *out)
+{
+    gs_mesh_ *m = &r->mesh;
+    const gs_real h = r->dt;
+    const gs_real a = m->inv_ratio;
+    const gs_real w = r->base_speed;
+    const gs_real external = driven_external(r, in->load, a * w);
+    gs_real t_f = m->last_follower_torque;
+    gs_real w_next = w;
+    gs_real dw = GS_R(0.0);
+    for (int pass = 0; pass < LINEARISATION_PASSES; ++pass) {
+        /* tau_mesh ~ m0 + m1*T_F; J_B dw/h = tau_m - mu_B w' - a (tau_mesh - T_F) with
+         * T_F = external - J_F a dw/h - mu_F a w'. (1 - m1) >= 0 unless the gear self-locks. */
+        gs_real m0;
+        gs_real m1;
+        gs_mesh_loss_linearize(m, ctx, t_f, a * w_next, &m0, &m1);
+        const gs_real q = a * gs_max(GS_R(1.0) - m1, GS_R(0.0));
+        const gs_real visc = m->mu_base + q * m->mu_follower * a;
+        dw = (in->base_torque_Nm - a * m0 + q * external - visc * w)
+             / ((r->base_inertia + q * a * r->driven_inertia) / h + visc);
+        w_next = w + dw;
+        t_f = external - r->driven_inertia * a * dw / h - m->mu_follower * a * w_next;
+    }
+    const gs_real w_f = a * w_next;
+    const gs_real tau_mesh = gs_mesh_loss_torque(m, ctx, t_f, w_f);
+    const gs_real tau_b = m->mu_base * w_next + a * (tau_mesh - t_f);
+    const gs_real tau_f = t_f + m->mu_follower * w_f;
+    m->last_follower_torque = t_f;
+    r->base_speed = w_next;
+    r->driven_speed = w_f;
+    out->base_torque_Nm = in->base_torque_Nm;
+    out->base_port_torque_Nm = tau_b;
+    out->driven_port_torque = tau_f;
+    out->driven_acceleration = a * dw / h;
+    out->mesh_loss_power_W = tau_mesh * w_f;
+    out->loss_power_W = out->mesh_loss_power_W + m->mu_base * w_next * w_next + m->mu_follower * w_f * w_f;
+    out->port_power_W = tau_b * w_next + tau_f * w_f;
+}
+
+static void backlash_step(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
+                          gs_rig_output *out)
+{
+    gs_mesh_ *m = &r->mesh;
+    const int n = r->substeps;
+    const gs_real h = r->dt / (gs_real)n;
+    const gs_real r_b = m->base_radius;
+    const gs_real sr_f = m->direction * m->follower_radius;
+    const gs_real j_f = r->driven_inertia + h * m->mu_follower;
+    const gs_real j_b = r->base_inertia + h * m->mu_base;
+    const int speed_driven = r->base_drive == GS_BASE_SPEED_DRIVEN;
+    const gs_real w_b_start = r->base_speed;
+    const gs_real w_f_start = r->driven_speed;
+    gs_real sum_tau_b = GS_R(0.0), sum_tau_f = GS_R(0.0), sum_mesh = GS_R(0.0), sum_loss = GS_R(0.0);
+    gs_real sum_port = GS_R(0.0), sum_f = GS_R(0.0);
+    for (int k = 0; k < n; ++k) {
+        const gs_real w_b = r->base_speed;
+        const gs_real w_f = r->driven_speed;
+        const gs_real x = m->position;
+        /* explicit: meshing loss on the last contact force, load friction */
+        const gs_real tau_mesh = gs_mesh_loss_torque(m, ctx, -sr_f * m->contact_force, w_f);
+        const gs_real w_f_free = (r->driven_inertia * w_f
+                                  + h * (driven_external(r, in->load, w_f) - tau_mesh)) / j_f;
+        gs_real w_b_free;
+        if (speed_driven) {
+            /* the held speed ramps linearly from the last sample to this one */
+            w_b_free = w_b_start + (in->base_speed_rad_s - w_b_start) * (gs_real)(k + 1) / (gs_real)n;
+        } else {
+            w_b_free = (r->base_inertia * w_b + h * in->base_torque_Nm) / j_b;
+        }
+        gs_real f;
+        gs_real f_spring;
+        const gs_real u_free = r_b * w_b_free - sr_f * w_f_free;
+        const gs_real u = gs_contact_solve(m, x, u_free, h, r->inv_eff_mass_contact, &f, &f_spring);
+        const gs_real w_f_new = w_f_free + h * sr_f * f / j_f;
+        const gs_real w_b_new = speed_driven ? w_b_free : w_b_free - h * r_b * f / j_b;
+        m->position = x + h * (r_b * w_b_new - sr_f * w_f_new);
+        m->contact_force = f;
+        r->base_speed = w_b_new;
+        r->driven_speed = w_f_new;
+        r->base_angle += h * w_b_new;
+        r->driven_position += h * w_f_new;
+        const gs_real tau_b = r_b * f + m->mu_base * w_b_new;
+        const gs_real tau_f = -sr_f * f + tau_mesh + m->mu_follower * w_f_new;
+        const gs_real p_mesh = tau_mesh * w_f;
+        sum_tau_b += tau_b;
+        sum_tau_f += tau_f;
+        sum_mesh += p_mesh;
+        sum_loss += p_mesh + m->mu_base * w_b_new * w_b_new + m->mu_follower * w_f_new * w_f_new
+                    + (f - f_spring) * u;
+        sum_port += tau_b * w_b_new + tau_f * w_f_new;
+        sum_f += f;
+    }
+    const gs_real inv_n = GS_R(1.0) / (gs_real)n;
+    out->base_port_torque_Nm = sum_tau_b * inv_n;
+    out->base_torque_Nm = speed_driven ? out->base_port_torque_Nm + r->base_inertia * r->base_acceleration
+                                       : in->base_torque_Nm;
+    out->driven_port_torque = sum_tau_f * inv_n;
+    out->mesh_loss_power_W = sum_mesh * inv_n;
+    out->loss_power_W = sum_loss * inv_n;
+    out->port_power_W = sum_port * inv_n;
+    out->contact_force_N = sum_f * inv_n;
+    out->driven_acceleration = (r->driven_speed - w_f_start) / r->dt;
+    (void)w_b_start;
+}
+
+void gs_rig_step(gs_rig *r, const gs_rig_input *in, gs_rig_output *out)
+{
+    gs_mesh_ *m = &r->mesh;
+    const int from_input = r->temperature_source == GS_TEMPERATURE_FROM_INPUT;
+    if (r->base_drive == GS_BASE_SPEED_DRIVEN) {
+        const gs_real w_in = in->base_speed_rad_s;
+        if (!r->started) {
+            /* the first sample sets the speeds: no acceleration, teeth moving together */
+            r->previous_base_speed_input = w_in;
+            r->base_speed = w_in;
+            r->driven_speed = m->inv_ratio * w_in;
+        }
+        const gs_real raw = (w_in - r->previous_base_speed_input) / r->dt;
+        r->base_acceleration += r->accel_gain * (raw - r->base_acceleration);
+        r->previous_base_speed_input = w_in;
+    }
+    r->started = 1;
+    gs_loss_ctx_ ctx;
+    gs_mesh_loss_prepare(m, from_input ? in->measured_temperature_K : m->temperature, &ctx);
+    out->contact_force_N = GS_R(0.0);
+    if (m->backlash) {
+        backlash_step(r, &ctx, in, out);
+    } else {
+        if (r->base_drive == GS_BASE_SPEED_DRIVEN) {
+            rigid_speed_driven(r, &ctx, in, out);
+        } else {
+            rigid_torque_driven(r, &ctx, in, out);
+        }
+        r->base_angle += r->dt * r->base_speed;
+        r->driven_position += r->dt * r->driven_speed;
+    }
+    if (from_input) {
+        m->temperature = in->measured_temperature_K;
+    } else {
+        gs_mesh_thermal_step(m, r->dt, out->loss_power_W, GS_R(0.0), in->ambient_temperature_K,
+                             r->inv_thermal_resistance);
+    }
+    out->base_speed_rad_s = r->base_speed;
+    out->base_angle_rad = r->base_angle;
+    out->driven_speed = r->driven_speed;
+    out->driven_position = r->driven_position;
+    out->contact_energy_J = m->backlash ? gs_contact_energy(m, m->position) : GS_R(0.0);
+    out->temperature_K = m->temperature;
+    out->backlash_position_m = m->position;
+}
+
+void gs_rig_run(gs_rig *rig, size_t n, const gs_rig_input *in, gs_rig_output *out)
+{
+    for (size_t i = 0; i < n; ++i) {
+        gs_rig_step(rig, &in[i], &out[i]);
+    }
+}
