@@ -9,7 +9,7 @@
 #include "mesh.h"
 #include "gs_math.h"
 
-#define NEWTON_ITERATIONS 8
+#define NEWTON_ITERATIONS 12
 
 /* Force and its derivative along u when x = x0 + h*u (dfdu = h*df/dx + df/dv). */
 static gs_real contact_force_d(const gs_mesh_ *m, gs_real x, gs_real u, gs_real h,
@@ -117,12 +117,20 @@ gs_real gs_contact_solve(gs_mesh_ *m, gs_real x, gs_real u_free, gs_real h, gs_r
             const gs_real phi = u - u_free + c * f;
             if (phi > GS_R(0.0)) {
                 hi = u;
-            } else {
+            } else if (phi < GS_R(0.0)) {
                 lo = u;
+            } else {
+                break; /* exact root */
             }
+            /* Newton inside the bracket; a step onto or past its ends (a kink
+             * or jump of the law between u and the root) bisects instead, so
+             * the bracket shrinks every iteration. */
             const gs_real slope = GS_R(1.0) + c * dfdu;
-            gs_real next = slope > GS_R(0.0) ? u - phi / slope : GS_R(0.5) * (lo + hi);
-            if (!(next >= lo && next <= hi)) {
+            gs_real next = slope > GS_R(0.0) ? u - phi / slope : lo;
+            if (!(next < u) && !(next > u)) {
+                break; /* the Newton step is below the resolution of u */
+            }
+            if (!(next > lo && next < hi)) {
                 next = GS_R(0.5) * (lo + hi);
             }
             u = next;

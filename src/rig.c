@@ -251,6 +251,30 @@ static void rigid_torque_driven(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig
     out->port_power_W = tau_b * w_next + tau_f * w_f;
 }
 
+typedef struct {
+    gs_real w_b, w_f; /* speeds at the end of the sub-step */
+    gs_real f, f_spring, u;
+} substep_end;
+
+/* One sub-step from the current speeds with the meshing loss tau_mesh held:
+ * free motion, then the backward-Euler contact. Changes only the lock flag. */
+static substep_end contact_substep(gs_rig *r, gs_real h, gs_real w_b_free, gs_real external,
+                                   gs_real tau_mesh)
+{
+    gs_mesh_ *m = &r->mesh;
+    const gs_real r_b = m->base_radius;
+    const gs_real sr_f = m->direction * m->follower_radius;
+    const gs_real j_f = r->driven_inertia + h * m->mu_follower;
+    const gs_real j_b = r->base_inertia + h * m->mu_base;
+    const gs_real w_f_free = (r->driven_inertia * r->driven_speed + h * (external - tau_mesh)) / j_f;
+    substep_end e;
+    const gs_real u_free = r_b * w_b_free - sr_f * w_f_free;
+    e.u = gs_contact_solve(m, m->position, u_free, h, r->inv_eff_mass_contact, &e.f, &e.f_spring);
+    e.w_f = w_f_free + h * sr_f * e.f / j_f;
+    e.w_b = r->base_drive == GS_BASE_SPEED_DRIVEN ? w_b_free : w_b_free - h * r_b * e.f / j_b;
+    return e;
+}
+
 static void backlash_step(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
                           gs_rig_output *out)
 {
@@ -259,50 +283,49 @@ static void backlash_step(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input
     const gs_real h = r->dt / (gs_real)n;
     const gs_real r_b = m->base_radius;
     const gs_real sr_f = m->direction * m->follower_radius;
-    const gs_real j_f = r->driven_inertia + h * m->mu_follower;
-    const gs_real j_b = r->base_inertia + h * m->mu_base;
     const int speed_driven = r->base_drive == GS_BASE_SPEED_DRIVEN;
     const gs_real w_b_start = r->base_speed;
     const gs_real w_f_start = r->driven_speed;
     gs_real sum_tau_b = GS_R(0.0), sum_tau_f = GS_R(0.0), sum_mesh = GS_R(0.0), sum_loss = GS_R(0.0);
     gs_real sum_port = GS_R(0.0), sum_f = GS_R(0.0);
     for (int k = 0; k < n; ++k) {
-        const gs_real w_b = r->base_speed;
         const gs_real w_f = r->driven_speed;
-        const gs_real x = m->position;
         /* explicit: meshing loss on the last contact force, load friction */
-        const gs_real tau_mesh = gs_mesh_loss_torque(m, ctx, -sr_f * m->contact_force, w_f);
-        const gs_real w_f_free = (r->driven_inertia * w_f
-                                  + h * (driven_external(r, in->load, w_f) - tau_mesh)) / j_f;
-        gs_real w_b_free;
-        if (speed_driven) {
-            /* the held speed ramps linearly from the last sample to this one */
-            w_b_free = w_b_start + (in->base_speed_rad_s - w_b_start) * (gs_real)(k + 1) / (gs_real)n;
-        } else {
-            w_b_free = (r->base_inertia * w_b + h * in->base_torque_Nm) / j_b;
+        gs_real tau_mesh = gs_mesh_loss_torque(m, ctx, -sr_f * m->contact_force, w_f);
+        const gs_real external = driven_external(r, in->load, w_f);
+        /* the held speed ramps linearly from the last sample to this one */
+        const gs_real w_b_free =
+            speed_driven ? w_b_start + (in->base_speed_rad_s - w_b_start) * (gs_real)(k + 1) / (gs_real)n
+                         : (r->base_inertia * r->base_speed + h * in->base_torque_Nm)
+                               / (r->base_inertia + h * m->mu_base);
+        const int locked = m->locked;
+        substep_end e = contact_substep(r, h, w_b_free, external, tau_mesh);
+        if (tau_mesh * e.w_f < GS_R(0.0)) {
+            /* The explicit loss would reverse the follower and do negative work:
+             * at a reversal the smoothed law is near zero anyway, so this
+             * sub-step runs without it. At most two solves per sub-step. */
+            m->locked = locked;
+            tau_mesh = GS_R(0.0);
+            e = contact_substep(r, h, w_b_free, external, tau_mesh);
         }
-        gs_real f;
-        gs_real f_spring;
-        const gs_real u_free = r_b * w_b_free - sr_f * w_f_free;
-        const gs_real u = gs_contact_solve(m, x, u_free, h, r->inv_eff_mass_contact, &f, &f_spring);
-        const gs_real w_f_new = w_f_free + h * sr_f * f / j_f;
-        const gs_real w_b_new = speed_driven ? w_b_free : w_b_free - h * r_b * f / j_b;
-        m->position = x + h * (r_b * w_b_new - sr_f * w_f_new);
-        m->contact_force = f;
-        r->base_speed = w_b_new;
-        r->driven_speed = w_f_new;
-        r->base_angle += h * w_b_new;
-        r->driven_position += h * w_f_new;
-        const gs_real tau_b = r_b * f + m->mu_base * w_b_new;
-        const gs_real tau_f = -sr_f * f + tau_mesh + m->mu_follower * w_f_new;
-        const gs_real p_mesh = tau_mesh * w_f;
+        m->position += h * (r_b * e.w_b - sr_f * e.w_f);
+        m->contact_force = e.f;
+        r->base_speed = e.w_b;
+        r->driven_speed = e.w_f;
+        r->base_angle += h * e.w_b;
+        r->driven_position += h * e.w_f;
+        const gs_real tau_b = r_b * e.f + m->mu_base * e.w_b;
+        const gs_real tau_f = -sr_f * e.f + tau_mesh + m->mu_follower * e.w_f;
+        /* paired with the end speeds like every port term: the power identity
+         * of the sub-step is exact, and tau_mesh*w_f >= 0 by the check above */
+        const gs_real p_mesh = tau_mesh * e.w_f;
         sum_tau_b += tau_b;
         sum_tau_f += tau_f;
         sum_mesh += p_mesh;
-        sum_loss += p_mesh + m->mu_base * w_b_new * w_b_new + m->mu_follower * w_f_new * w_f_new
-                    + (f - f_spring) * u;
-        sum_port += tau_b * w_b_new + tau_f * w_f_new;
-        sum_f += f;
+        sum_loss += p_mesh + m->mu_base * e.w_b * e.w_b + m->mu_follower * e.w_f * e.w_f
+                    + (e.f - e.f_spring) * e.u;
+        sum_port += tau_b * e.w_b + tau_f * e.w_f;
+        sum_f += e.f;
     }
     const gs_real inv_n = GS_R(1.0) / (gs_real)n;
     out->base_port_torque_Nm = sum_tau_b * inv_n;
@@ -314,7 +337,6 @@ static void backlash_step(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input
     out->port_power_W = sum_port * inv_n;
     out->contact_force_N = sum_f * inv_n;
     out->driven_acceleration = (r->driven_speed - w_f_start) / r->dt;
-    (void)w_b_start;
 }
 
 void gs_rig_step(gs_rig *r, const gs_rig_input *in, gs_rig_output *out)
