@@ -139,8 +139,12 @@ gs_status gs_rig_init_rack(gs_rig *rig, const gs_rack_pinion_params *rack,
 /* Back to the initial state (speeds, angles, temperature, backlash). */
 void gs_rig_reset(gs_rig *rig);
 
-/* One fixed step of dt_s. Cannot fail; constant cost per instance. Inputs
- * must be finite; the outputs are then finite. */
+/* One fixed step of dt_s. Cannot fail; bounded cost per instance (fixed
+ * sub-step and iteration counts). Inputs must be finite; the outputs are then
+ * finite. Speed-driven: the first step after init/reset takes its base speed
+ * as the initial state, with the follower geared to it (teeth moving
+ * together, no acceleration); feed a zero-speed sample first to start at
+ * rest. */
 void gs_rig_step(gs_rig *rig, const gs_rig_input *in, gs_rig_output *out);
 
 /* n steps over caller-owned arrays; bit-identical to n calls of gs_rig_step. */

@@ -1,0 +1,497 @@
+/*
+ * test_backlash.c - backlash and hard-stop contact (docs/physics.md section 4,
+ * rig.h).
+ *
+ *  v = r_B*omega_B - s*r_F*omega_F, r_F = g*r_B (4.1); dx/dt = v (4.2)
+ *  lost motion from the centre: t = (b/2)/v
+ *  contact laws (4.3) full damped, (4.4) full undamped (damping only while
+ *  the teeth close), (4.5) smooth (cubic step S over the transition region),
+ *  optional no-pull clip; tooth torques T_B = r_B*f, T_F0 = -s*r_F*f (4.6)
+ *  rebound: a conservative contact (D = 0) returns the impact speed;
+ *  damping lowers the rebound, full_damped more than full_undamped.
+ *  Newton on the follower: J_F*domega_F/dt = load - tau_F, tau_F = -s*r_F*f.
+ */
+#include "test_common.h"
+
+static double cubic_step(double xi)
+{
+    return xi * xi * (3.0 - 2.0 * xi);
+}
+
+/* Hand contact law f(x, v) of physics.md 4.3-4.5 with the no-pull clip. */
+static double contact_law(gs_hard_stop_model m, int no_pull, double K, double D, double d,
+                          double hb, double x, double v)
+{
+    double f = 0.0;
+    if (x >= hb) {
+        const double pen = x - hb;
+        if (m == GS_HARD_STOP_SMOOTH)
+            f = cubic_step(pen / d < 1.0 ? pen / d : 1.0) * (K * pen + D * v);
+        else if (m == GS_HARD_STOP_FULL_UNDAMPED)
+            f = K * pen + (v >= 0.0 ? D * v : 0.0);
+        else
+            f = K * pen + D * v;
+        if (no_pull && f < 0.0)
+            f = 0.0;
+    } else if (x <= -hb) {
+        const double pen = x + hb; /* <= 0 */
+        if (m == GS_HARD_STOP_SMOOTH)
+            f = cubic_step(-pen / d < 1.0 ? -pen / d : 1.0) * (K * pen + D * v);
+        else if (m == GS_HARD_STOP_FULL_UNDAMPED)
+            f = K * pen + (v <= 0.0 ? D * v : 0.0);
+        else
+            f = K * pen + D * v;
+        if (no_pull && f > 0.0)
+            f = 0.0;
+    }
+    return f;
+}
+
+static gs_simple_gear_params backlash_gear(double g, gs_output_rotation rot, gs_hard_stop_model m,
+                                           double b, double rB, double K, double D)
+{
+    gs_simple_gear_params gp = gs_simple_gear_params_default();
+    gp.teeth_ratio = R(g);
+    gp.output_shaft_rotates = rot;
+    gp.friction_model = GS_FRICTION_NONE;
+    gp.backlash.enabled = 1;
+    gp.backlash.hard_stop_model = m;
+    gp.backlash.linear_backlash_m = R(b);
+    gp.backlash.base_radius_m = R(rB);
+    gp.backlash.transition_region_m = R(1e-4);
+    gp.backlash.stiffness_N_m = R(K);
+    gp.backlash.damping_N_s_m = R(D);
+    gp.backlash.initial_position_m = R(0.0);
+    gp.backlash.no_pull = 1;
+    return gp;
+}
+
+/* ---- Block level: explicit Euler position and the contact laws. */
+static void run_block_contact(gs_hard_stop_model m, int no_pull, int lower)
+{
+    const double g = 2.0, rB = 0.05, b = 1e-3, K = 1e5, D = 200.0, dt = 1e-3, wF = 0.1;
+    gs_simple_gear_params gp = backlash_gear(g, GS_ROTATES_OPPOSITE, m, b, rB, K, D);
+    gs_simple_gear gear;
+    gs_gear_ports_in in;
+    gs_gear_ports_out out;
+    const double s = -1.0, rF = g * rB;
+    double hb, x_before, d, Kd, Dd;
+    int k, conv = 0, contacts = 0;
+    const double side = lower ? -1.0 : 1.0;
+    gp.backlash.no_pull = no_pull;
+    gp.viscous_coefficients[0] = R(0.01);
+    gp.viscous_coefficients[1] = R(0.02);
+    gp.backlash.initial_position_m = R(side * (b / 2.0 - 3.5e-5));
+    INIT_GEAR(&gear, &gp);
+    hb = 0.5 * (double)gp.backlash.linear_backlash_m;
+    d = (double)gp.backlash.transition_region_m;
+    Kd = (double)gp.backlash.stiffness_N_m;
+    Dd = (double)gp.backlash.damping_N_s_m;
+    x_before = (double)gp.backlash.initial_position_m;
+    memset(&in, 0, sizeof in);
+    for (k = 0; k < 26; ++k) {
+        /* 12 steps closing (+-0.02 m/s) past the transition region, then 14 opening */
+        const double v_cmd = side * (k < 12 ? 0.02 : -0.02);
+        double v, f_before, f_after, f, x_after, tol;
+        int mb, ma;
+        in.follower_speed_rad_s = R(wF);
+        in.base_speed_rad_s = R((v_cmd + s * rF * wF) / rB);
+        v = rB * (double)in.base_speed_rad_s - s * rF * (double)in.follower_speed_rad_s;
+        gs_simple_gear_step(&gear, R(dt), &in, &out);
+        x_after = (double)out.backlash_position_m;
+        ASSERT_NEAR(x_after, x_before + dt * v, 0.0, 8.0 * GS_EPS * b);
+        f_before = contact_law(m, no_pull, Kd, Dd, d, hb, x_before, v);
+        f_after = contact_law(m, no_pull, Kd, Dd, d, hb, x_after, v);
+        f = (double)out.contact_force_N;
+        tol = TOL_REL * (Kd * b + Dd * fabs(v)) + 16.0 * GS_EPS * (Kd * b + Dd * fabs(v));
+        mb = near_enough(f, f_before, 0.0, tol);
+        ma = near_enough(f, f_after, 0.0, tol);
+        if (!mb && !ma) {
+            print_error("step %d: x %.9g -> %.9g, v %.6g: f = %.12g, law gives %.12g (x before) or "
+                        "%.12g (x after)\n",
+                        k, x_before, x_after, v, f, f_before, f_after);
+            fail();
+        }
+        /* one convention for the whole run */
+        if (mb && !ma) {
+            assert_true(conv != 2);
+            conv = 1;
+        }
+        if (ma && !mb) {
+            assert_true(conv != 1);
+            conv = 2;
+        }
+        if (!is_zero(f))
+            ++contacts;
+        /* tooth torques (4.6) plus viscous terms */
+        ASSERT_NEAR(out.base_torque_Nm, rB * f + 0.01 * (double)in.base_speed_rad_s, TOL_REL,
+                    tol * rB);
+        ASSERT_NEAR(out.follower_torque_Nm, -s * rF * f + 0.02 * wF, TOL_REL, tol * rF);
+        x_before = x_after;
+    }
+    assert_true(contacts >= 10);
+}
+
+static void test_block_contact_laws(void **state)
+{
+    const gs_hard_stop_model models[3] = {GS_HARD_STOP_SMOOTH, GS_HARD_STOP_FULL_UNDAMPED,
+                                          GS_HARD_STOP_FULL_DAMPED};
+    int m, np, lower;
+    (void)state;
+    for (m = 0; m < 3; ++m)
+        for (np = 0; np < 2; ++np)
+            for (lower = 0; lower < 2; ++lower)
+                run_block_contact(models[m], np, lower);
+}
+
+/* ---- Rig: lost motion. The base turns at constant speed, the follower rests
+ * centred in the gap; contact after (b/2)/(r_B*omega_B). Then the base carries
+ * the follower (held against the flank by a drag on the driven side). */
+static void test_lost_motion_gear(void **state)
+{
+    const gs_output_rotation rots[2] = {GS_ROTATES_SAME, GS_ROTATES_OPPOSITE};
+    int ir, k;
+    (void)state;
+    for (ir = 0; ir < 2; ++ir) {
+        const double g = 2.0, rB = 0.1, b = 2e-3;
+        gs_simple_gear_params gp =
+            backlash_gear(g, rots[ir], GS_HARD_STOP_FULL_DAMPED, b, rB, 1e6, 1e3);
+        gs_rig_params rp = gs_rig_params_default();
+        gs_rig rig;
+        gs_rig_output out;
+        const double s = gear_sign(rots[ir]);
+        const double t_contact = 0.1005;
+        const double wB = (b / 2.0) / (rB * t_contact);
+        double dt, x_prev = 0.0, v;
+        int k_contact = -1;
+        gs_rig_input in;
+        rp.dt_s = R(1e-3);
+        /* a drag on the follower keeps the teeth together after the impact;
+         * it is tanh-smoothed, so it is exactly zero while the follower rests */
+        rp.load_coulomb_friction = R(0.5);
+        rp.load_coulomb_speed_threshold = R(1e-2);
+        INIT_GEAR_RIG(&rig, &gp, &rp);
+        dt = (double)rp.dt_s;
+        /* the rig's first sample sets both speeds (teeth moving together,
+         * rig.c): start from rest, then hold omega_B from t = 0 */
+        {
+            const gs_rig_input rest = rig_speed_input(0.0, 0.0);
+            gs_rig_step(&rig, &rest, &out);
+            ASSERT_NEAR(out.driven_speed, 0.0, 0.0, 0.0);
+            ASSERT_NEAR(out.backlash_position_m, 0.0, 0.0, 0.0);
+        }
+        in = rig_speed_input(wB, 0.0);
+        v = rB * (double)in.base_speed_rad_s; /* the follower rests */
+        for (k = 1; k <= 400; ++k) {
+            gs_rig_step(&rig, &in, &out);
+            assert_true(rig_output_finite(&out));
+            if (k_contact < 0) {
+                if (!is_zero((double)out.contact_force_N) || !is_zero((double)out.driven_speed)) {
+                    k_contact = k;
+                } else if (k >= 2) {
+                    /* free play: x advances by v*dt, nothing moves the follower */
+                    ASSERT_NEAR((double)out.backlash_position_m - x_prev, v * dt, 1e-9,
+                                8.0 * GS_EPS * b);
+                    ASSERT_NEAR(out.contact_energy_J, 0.0, 0.0, 0.0);
+                    ASSERT_NEAR(out.base_port_torque_Nm, 0.0, 0.0, 0.0);
+                }
+            }
+            x_prev = (double)out.backlash_position_m;
+        }
+        if (k_contact < 0)
+            fail_msg("no contact within 400 steps (expected at %.4f s)", t_contact);
+        /* contact starts during step k_contact, i.e. in ((k-1)*dt, k*dt] */
+        if (!(k_contact * dt >= t_contact - 1e-9 && (k_contact - 1) * dt <= t_contact + dt)) {
+            print_error("lost motion: contact in step %d (t = %.4f s), expected %.4f s = "
+                        "(b/2)/(r_B*omega_B)\n",
+                        k_contact, k_contact * dt, t_contact);
+            fail();
+        }
+        /* afterwards the base carries the follower: omega_F = s*omega_B/g */
+        ASSERT_NEAR(out.driven_speed, s * wB / g, 1e-3, 0.0);
+        assert_true((double)out.backlash_position_m > b / 2.0 - 1e-5);
+    }
+}
+
+static void test_lost_motion_rack(void **state)
+{
+    const gs_rack_direction dirs[2] = {GS_RACK_POSITIVE, GS_RACK_NEGATIVE};
+    int id, k;
+    (void)state;
+    for (id = 0; id < 2; ++id) {
+        gs_rack_pinion_params pp = gs_rack_pinion_params_default();
+        gs_rig_params rp = gs_rig_params_default();
+        gs_rig rig;
+        gs_rig_output out;
+        const double r = 0.05, b = 1e-3, t_contact = 0.0805;
+        const double wP = (b / 2.0) / (r * t_contact);
+        double dt;
+        int k_contact = -1;
+        gs_rig_input in;
+        pp.pinion_radius_m = R(r);
+        pp.rack_directionality = dirs[id];
+        pp.backlash = gs_simple_gear_params_default().backlash;
+        pp.backlash.enabled = 1;
+        pp.backlash.hard_stop_model = GS_HARD_STOP_FULL_DAMPED;
+        pp.backlash.linear_backlash_m = R(b);
+        pp.backlash.stiffness_N_m = R(1e6);
+        pp.backlash.damping_N_s_m = R(2e3);
+        pp.backlash.initial_position_m = R(0.0);
+        rp.driven_inertia = R(2.0);
+        rp.load_coulomb_friction = R(5.0);
+        rp.load_coulomb_speed_threshold = R(1e-3);
+        INIT_RACK_RIG(&rig, &pp, &rp);
+        dt = (double)rp.dt_s;
+        {
+            const gs_rig_input rest = rig_speed_input(0.0, 0.0);
+            gs_rig_step(&rig, &rest, &out);
+        }
+        in = rig_speed_input(wP, 0.0);
+        for (k = 1; k <= 400; ++k) {
+            gs_rig_step(&rig, &in, &out);
+            assert_true(rig_output_finite(&out));
+            if (k_contact < 0 &&
+                (!is_zero((double)out.contact_force_N) || !is_zero((double)out.driven_speed)))
+                k_contact = k;
+        }
+        assert_true(k_contact > 0);
+        if (!(k_contact * dt >= t_contact - 1e-9 && (k_contact - 1) * dt <= t_contact + dt)) {
+            print_error("rack lost motion: contact in step %d, expected at %.4f s\n", k_contact,
+                        t_contact);
+            fail();
+        }
+        ASSERT_NEAR(out.driven_speed, rack_sign(dirs[id]) * r * wP, 1e-3, 0.0);
+    }
+}
+
+/* ---- Rig: a free follower (J_F) coasts into the lower flank of a base held
+ * at zero speed. Returns -omega_after/omega_before. Also checks, every step,
+ * Newton's law on the follower, and for D = 0 that kinetic plus contact
+ * energy never exceeds the kinetic energy before the impact. */
+typedef struct {
+    double ratio;
+    int pulled; /* a step whose mean contact force pulled (x > 0: f < 0; x < 0: f > 0) */
+} impact_result;
+
+static impact_result impact(gs_hard_stop_model m, double D, int no_pull, int substeps, int steps)
+{
+    const double g = 2.0, rB = 0.1, b = 1e-3, K = 1e4, JF = 0.01, pulse = 0.1;
+    gs_simple_gear_params gp = backlash_gear(g, GS_ROTATES_SAME, m, b, rB, K, D);
+    gs_rig_params rp = gs_rig_params_default();
+    gs_rig rig;
+    gs_rig_output out;
+    impact_result res = {0.0, 0};
+    const double s = 1.0, rF = g * rB;
+    double dt, w_prev = 0.0, w_before = 0.0, ke_before = 0.0;
+    int k, contact = 0, released = -1;
+    gp.backlash.no_pull = no_pull;
+    rp.dt_s = R(1e-3);
+    rp.driven_inertia = R(JF);
+    rp.contact_substeps = substeps;
+    INIT_GEAR_RIG(&rig, &gp, &rp);
+    dt = (double)rp.dt_s;
+    for (k = 1; k <= steps; ++k) {
+        const double load = k <= 5 ? pulse : 0.0;
+        const gs_rig_input in = rig_speed_input(0.0, load);
+        double w, f, x;
+        gs_rig_step(&rig, &in, &out);
+        assert_true(rig_output_finite(&out));
+        w = (double)out.driven_speed;
+        f = (double)out.contact_force_N;
+        x = (double)out.backlash_position_m;
+        /* Newton on the follower: J*dw/dt = load - tau_F, tau_F = -s*r_F*f */
+        {
+            const double scale = fabs(load) + rF * fabs(f) + 1e-6;
+            ASSERT_NEAR(out.driven_port_torque, -s * rF * f, TOL_REL, 1e-12);
+            /* rounding: the speed is accumulated over the sub-steps */
+            ASSERT_NEAR(JF * (w - w_prev) / dt, load - (double)out.driven_port_torque,
+                        dmax(1e-7, TOL_REL),
+                        1e-9 * scale + (substeps + 8) * GS_EPS * JF * (fabs(w) + fabs(w_prev)) / dt);
+        }
+        if ((x > 0.0 && f < 0.0) || (x < 0.0 && f > 0.0))
+            res.pulled = 1;
+        if (k == 20) {
+            w_before = w;
+            ke_before = 0.5 * JF * w * w;
+            assert_true(w > 0.0); /* moving towards the lower flank (v = -r_F*omega_F) */
+            assert_true(contact == 0);
+        }
+        if (k > 20 && contact == 0) {
+            if (!is_zero(f))
+                contact = 1;
+            else
+                ASSERT_NEAR(w, w_before, 1e-9, 1e-12); /* coasting */
+        }
+        if (k > 20 && is_zero(D)) {
+            /* conservative contact: nothing may be created */
+            ASSERT_LE(0.5 * JF * w * w + (double)out.contact_energy_J, ke_before,
+                      TOL_ENERGY * ke_before + 1e-15);
+        }
+        if (contact == 1 && is_zero(f) && x > -b / 2.0) {
+            contact = 2; /* separated */
+            released = k;
+        }
+        if (contact == 2 && k == released + 2) {
+            res.ratio = -w / w_before;
+            return res;
+        }
+        w_prev = w;
+    }
+    if (steps >= 200)
+        fail_msg("impact scenario did not complete (contact state %d)", contact);
+    return res;
+}
+
+static void test_rebound_conservative(void **state)
+{
+    const gs_hard_stop_model models[3] = {GS_HARD_STOP_SMOOTH, GS_HARD_STOP_FULL_UNDAMPED,
+                                          GS_HARD_STOP_FULL_DAMPED};
+    int m;
+    (void)state;
+    for (m = 0; m < 3; ++m) {
+        const impact_result r = impact(models[m], 0.0, 1, 64, 200);
+        print_message("hard stop %d, D = 0: rebound/impact speed = %.6f\n", (int)models[m],
+                      r.ratio);
+        assert_true(r.ratio > 0.97);
+        ASSERT_LE(r.ratio, 1.0, 1e-6);
+    }
+}
+
+static void test_rebound_damping(void **state)
+{
+    impact_result undamped, damped;
+    (void)state;
+    /* zeta = D/(2*sqrt(K*m_eff)) = 20/(2*sqrt(1e4*0.25)) = 0.2 */
+    undamped = impact(GS_HARD_STOP_FULL_UNDAMPED, 20.0, 1, 64, 200);
+    damped = impact(GS_HARD_STOP_FULL_DAMPED, 20.0, 1, 64, 200);
+    print_message("D = 20: full_undamped %.4f, full_damped %.4f\n", undamped.ratio, damped.ratio);
+    assert_true(damped.ratio > 0.0);
+    /* damping while closing still dissipates in the undamped-rebound model */
+    assert_true(undamped.ratio < 0.97);
+    assert_true(damped.ratio < undamped.ratio - 0.05);
+}
+
+/* no_pull = 1: the mean contact force never pulls (x > 0: f >= 0, x < 0:
+ * f <= 0). The same scenario without the clip does pull, so the check bites. */
+static void test_no_pull(void **state)
+{
+    const gs_hard_stop_model models[2] = {GS_HARD_STOP_FULL_DAMPED, GS_HARD_STOP_SMOOTH};
+    int m;
+    (void)state;
+    for (m = 0; m < 2; ++m) {
+        const impact_result with_clip = impact(models[m], 50.0, 1, 16, 150);
+        const impact_result without = impact(models[m], 50.0, 0, 16, 150);
+        assert_int_equal(with_clip.pulled, 0);
+        assert_int_equal(without.pulled, 1);
+    }
+}
+
+/* Stiff contact at a coarse step: K = 1e8 N/m, D = 1e4 N*s/m, dt = 1 ms,
+ * J_F = 1e-4 kg*m^2 (omega_n*dt = 200). A reversing base speed
+ * (amplitude W) drags the follower through the gap thousands of times.
+ * Physical bounds: |omega_F| <= 2*W/g (a contact cannot return more than the
+ * base tooth's speed plus the approach speed), penetration tiny, energy never
+ * created, Newton's law on the follower. */
+static void run_stiff(gs_hard_stop_model m, int substeps, double load_amp)
+{
+    const double g = 2.0, rB = 0.1, b = 1e-3, JF = 1e-4, W = 10.0;
+    gs_simple_gear_params gp = backlash_gear(g, GS_ROTATES_OPPOSITE, m, b, rB, 1e8, 1e4);
+    gs_rig_params rp = gs_rig_params_default();
+    gs_rig rig;
+    gs_rig_output out;
+    const double s = -1.0, rF = g * rB;
+    double dt, w_prev = 0.0, e_prev = 0.0, f_prev = 0.0;
+    int k, contacts = 0;
+    gp.backlash.transition_region_m = R(1e-5);
+    rp.dt_s = R(1e-3);
+    rp.driven_inertia = R(JF);
+    rp.contact_substeps = substeps;
+    INIT_GEAR_RIG(&rig, &gp, &rp);
+    dt = (double)rp.dt_s;
+    for (k = 1; k <= 4000; ++k) {
+        const double t = (k - 1) * dt; /* first sample at rest (see lost motion) */
+        const double load = load_amp * sin(2.0 * TEST_PI * 0.7 * t);
+        const gs_rig_input in = rig_speed_input(W * sin(2.0 * TEST_PI * 2.0 * t), load);
+        double w, f, e;
+        gs_rig_step(&rig, &in, &out);
+        assert_true(rig_output_finite(&out));
+        w = (double)out.driven_speed;
+        f = (double)out.contact_force_N;
+        e = (double)out.contact_energy_J;
+        if (!(fabs((double)out.backlash_position_m) <= b / 2.0 + 1e-5) ||
+            (is_zero(load_amp) && !(fabs(w) <= 2.0 * W / g * (1.0 + 1e-6))))
+            print_error("stiff contact, hard stop %d, substeps %d, load amplitude %g, step %d: "
+                        "x %.9g m (prev. E %.6g J), f %.9g N, omega_B %.6g, omega_F %.6g -> %.6g, "
+                        "E %.6g J\n",
+                        (int)m, substeps, load_amp, k, (double)out.backlash_position_m, e_prev, f,
+                        (double)out.base_speed_rad_s, w_prev, w, e);
+        if (is_zero(load_amp))
+            ASSERT_LE(fabs(w), 2.0 * W / g, 1e-6 * W);
+        ASSERT_LE(fabs((double)out.backlash_position_m), b / 2.0 + 1e-5, 0.0);
+        {
+            const double scale = fabs(load) + rF * fabs(f) + 1e-6;
+            ASSERT_NEAR(JF * (w - w_prev) / dt, load + s * rF * f, dmax(1e-6, TOL_REL),
+                        1e-9 * scale + (16 + 8) * GS_EPS * JF * (fabs(w) + fabs(w_prev)) / dt);
+        }
+        {
+            const double gross =
+                (fabs((double)out.base_port_torque_Nm * (double)out.base_speed_rad_s) +
+                 fabs((double)out.driven_port_torque * w)) *
+                dt;
+            /* + rounding of the stored energy: x is known to ~eps*b, so E to
+             * ~|f|*eps*b (negligible in double, ~1e-11 J in float here) */
+            ASSERT_LE((double)out.loss_power_W * dt + (e - e_prev), (double)out.port_power_W * dt,
+                      TOL_ENERGY * (gross + e + e_prev) + 1e-15 +
+                          4.0 * GS_EPS * b * (fabs(f) + fabs(f_prev)));
+        }
+        if (!is_zero(f))
+            ++contacts;
+        w_prev = w;
+        e_prev = e;
+        f_prev = f;
+    }
+    assert_true(contacts > 100);
+}
+
+typedef struct {
+    gs_hard_stop_model model;
+    int substeps;
+    double load_amp;
+} stiff_case;
+
+static const stiff_case stiff_cases[9] = {
+    {GS_HARD_STOP_SMOOTH, 0, 0.0},       {GS_HARD_STOP_SMOOTH, 1, 0.0},
+    {GS_HARD_STOP_SMOOTH, 0, 0.05},      {GS_HARD_STOP_FULL_UNDAMPED, 0, 0.0},
+    {GS_HARD_STOP_FULL_UNDAMPED, 1, 0.0}, {GS_HARD_STOP_FULL_UNDAMPED, 0, 0.05},
+    {GS_HARD_STOP_FULL_DAMPED, 0, 0.0},  {GS_HARD_STOP_FULL_DAMPED, 1, 0.0},
+    {GS_HARD_STOP_FULL_DAMPED, 0, 0.05}};
+
+static void test_stiff_contact_stability(void **state)
+{
+    const stiff_case *c = (const stiff_case *)*state;
+    run_stiff(c->model, c->substeps, c->load_amp);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_block_contact_laws),
+        cmocka_unit_test(test_lost_motion_gear),
+        cmocka_unit_test(test_lost_motion_rack),
+        cmocka_unit_test(test_rebound_conservative),
+        cmocka_unit_test(test_rebound_damping),
+        cmocka_unit_test(test_no_pull),
+        /* hard stop (smooth, full_undamped, full_damped) x (automatic sub-steps,
+         * one sub-step, automatic with a load) */
+        {"test_stiff_smooth_auto_substeps", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[0]},
+        {"test_stiff_smooth_1_substep", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[1]},
+        {"test_stiff_smooth_auto_substeps_load", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[2]},
+        {"test_stiff_full_undamped_auto_substeps", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[3]},
+        {"test_stiff_full_undamped_1_substep", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[4]},
+        {"test_stiff_full_undamped_auto_substeps_load", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[5]},
+        {"test_stiff_full_damped_auto_substeps", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[6]},
+        {"test_stiff_full_damped_1_substep", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[7]},
+        {"test_stiff_full_damped_auto_substeps_load", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[8]},
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
