@@ -1,0 +1,148 @@
+/* main.c - runs the scripted scenarios and prints every output of every step
+ * as IEEE-754 bit patterns (hex), one line per step, plus a hash per scenario.
+ *
+ * The same file builds the Cortex-M4F program (FW_TARGET defined; run under
+ * QEMU mps2-an386, output through semihosting) and the host program (host
+ * float build); scripts/firmware_check.sh compares the two outputs. Lines
+ * starting with '#' are informational (instruction counts on the target) and
+ * are not compared. */
+#include <inttypes.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "gearsim/gearsim.h"
+#include "scenarios.h"
+
+#ifdef FW_TARGET
+#include "platform.h"
+#endif
+
+#ifdef GS_SINGLE_PRECISION
+typedef uint32_t real_bits;
+#define BITS_FMT "%08" PRIx32
+#define PRECISION "float"
+#else
+typedef uint64_t real_bits;
+#define BITS_FMT "%016" PRIx64
+#define PRECISION "double"
+#endif
+
+static real_bits bits_of(gs_real x)
+{
+    real_bits b;
+    memcpy(&b, &x, sizeof b);
+    return b;
+}
+
+/* FNV-1a, 64 bit, over the bit patterns of every output. */
+static uint64_t hash_real(uint64_t h, gs_real x)
+{
+    const real_bits b = bits_of(x);
+    for (unsigned i = 0; i < sizeof b; ++i) {
+        h ^= (uint64_t)((b >> (8U * i)) & 0xFFU);
+        h *= UINT64_C(0x100000001b3);
+    }
+    return h;
+}
+
+static void output_fields(const gs_rig_output *o, gs_real v[GS_RIG_OUTPUT_FIELDS])
+{
+    v[0] = o->base_torque_Nm;
+    v[1] = o->base_speed_rad_s;
+    v[2] = o->base_angle_rad;
+    v[3] = o->driven_speed;
+    v[4] = o->driven_position;
+    v[5] = o->base_port_torque_Nm;
+    v[6] = o->driven_port_torque;
+    v[7] = o->mesh_loss_power_W;
+    v[8] = o->loss_power_W;
+    v[9] = o->port_power_W;
+    v[10] = o->contact_energy_J;
+    v[11] = o->temperature_K;
+    v[12] = o->backlash_position_m;
+    v[13] = o->contact_force_N;
+    v[14] = o->driven_acceleration;
+}
+
+#ifdef FW_TARGET
+/* Instructions per step: the scenario stepped once without printing, minus a
+ * pass that only builds the inputs. */
+static void report_cost(const fw_scenario *s, gs_rig *rig)
+{
+    gs_rig_input in;
+    gs_rig_output out;
+    gs_rig_reset(rig);
+    const uint64_t t0 = fw_instructions();
+    for (int k = 0; k < s->steps; ++k) {
+        s->input(k, &in);
+        gs_rig_step(rig, &in, &out);
+    }
+    const uint64_t t1 = fw_instructions();
+    for (int k = 0; k < s->steps; ++k) {
+        s->input(k, &in);
+        __asm volatile("" : : "r"(&in) : "memory");
+    }
+    const uint64_t t2 = fw_instructions();
+    const uint64_t step_total = (t1 - t0) - (t2 - t1);
+    printf("# cost %s %" PRIu32 " instructions/step (QEMU -icount, %d steps, %d contact sub-steps)\n",
+           s->name, (uint32_t)(step_total / (uint64_t)s->steps), s->steps, rig->mesh.backlash ? rig->substeps : 0);
+    gs_rig_reset(rig);
+}
+#endif
+
+static int run(const fw_scenario *s)
+{
+    gs_rig rig;
+    gs_error err;
+    const gs_status st = s->init(&rig, &err);
+    if (st != GS_OK) {
+        printf("scenario %s init failed: %s: %s\n", s->name, err.parameter, err.message);
+        return 1;
+    }
+#ifdef FW_TARGET
+    report_cost(s, &rig);
+#endif
+    printf("scenario %s steps %d\n", s->name, s->steps);
+    uint64_t h = UINT64_C(0xcbf29ce484222325);
+    for (int k = 0; k < s->steps; ++k) {
+        gs_rig_input in;
+        gs_rig_output out;
+        gs_real v[GS_RIG_OUTPUT_FIELDS];
+        s->input(k, &in);
+        gs_rig_step(&rig, &in, &out);
+        output_fields(&out, v);
+        printf("%04d", k);
+        for (int i = 0; i < GS_RIG_OUTPUT_FIELDS; ++i) {
+            printf(" " BITS_FMT, bits_of(v[i]));
+            h = hash_real(h, v[i]);
+        }
+        printf("\n");
+    }
+    printf("hash %s %08" PRIx32 "%08" PRIx32 "\n", s->name, (uint32_t)(h >> 32), (uint32_t)h);
+    return 0;
+}
+
+int main(void)
+{
+#ifdef FW_TARGET
+    fw_platform_init();
+    printf("# target Cortex-M4F (QEMU mps2-an386), precision " PRECISION "\n");
+    printf("# calibration %" PRIu32 " instructions counted for 200000 known\n",
+           (uint32_t)fw_calibrate(100000U));
+#endif
+    /* Layout: informational only. arm-none-eabi uses the AAPCS bare-metal
+     * variable-size enums (1 byte here), x86-64 int-sized ones, so the structs
+     * holding enums are a few bytes smaller on the target. */
+    printf("# layout sizeof gs_rig %u gs_simple_gear %u gs_rack_pinion %u gs_rig_params %u "
+           "gs_simple_gear_params %u gs_rack_pinion_params %u precision %s\n",
+           (unsigned)sizeof(gs_rig), (unsigned)sizeof(gs_simple_gear), (unsigned)sizeof(gs_rack_pinion),
+           (unsigned)sizeof(gs_rig_params), (unsigned)sizeof(gs_simple_gear_params),
+           (unsigned)sizeof(gs_rack_pinion_params), PRECISION);
+    int failures = 0;
+    for (int i = 0; i < fw_scenario_count; ++i) {
+        failures += run(&fw_scenarios[i]);
+    }
+    printf("done %d scenarios, %d failed\n", fw_scenario_count, failures);
+    return failures == 0 ? 0 : 1;
+}

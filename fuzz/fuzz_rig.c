@@ -1,0 +1,350 @@
+/* fuzz_rig.c - libFuzzer target: arbitrary finite input sequences to valid rigs.
+ *
+ * Input: 4 configuration bytes, ~40 bytes of parameters (each mapped into
+ * its valid range, log-uniform where it spans decades), then 10 bytes per
+ * step (5 inputs x 2 bytes). The configuration covers both blocks, both base
+ * drives, the five (gear) / three (rack) friction models, both smoothings,
+ * rigid mesh and backlash with the three hard-stop laws, no-pull, the static
+ * lock, heat path and measured temperature.
+ *
+ * Input values: |base speed| <= 1e3 rad/s, |base torque| <= 1e3 N*m,
+ * |load| <= 1e3 (N*m or N), temperatures in [1, 1e3] K; each is zero, a
+ * uniform value, or +-10^u with u uniform over 9 decades.
+ *
+ * Properties, every step:
+ *   - no crash, no sanitizer report; every output finite;
+ *   - rigid mesh: port_power_W == loss_power_W to rounding, and
+ *     loss_power_W >= 0 (passive smoothing; Simscape smoothing is documented
+ *     as slightly active, so only the balance is checked there);
+ *   - backlash, passive smoothing: port_power*dt >= loss_power*dt +
+ *     (contact_energy_J now - contact_energy_J before) - rounding tolerance
+ *     (no energy created). Without -DFZ_STRICT this is checked on
+ *     frictionless meshes only (known issue K1, docs/hardening.md);
+ *   - determinism: a copy of the rig (snapshot) stepped with the same input
+ *     gives the same bits, and gs_rig_run gives the bits of gs_rig_step. */
+#include "fuzz_common.h"
+
+#define MAX_STEPS 256
+
+#ifdef FZ_STRICT
+#define FZ_STRICT_ENERGY 1
+#else
+#define FZ_STRICT_ENERGY 0
+#endif
+
+typedef struct {
+    int gear;
+    int backlash;
+    gs_friction_model friction;
+    int passive;
+    double r_base;
+    double r_follow;
+} rig_info;
+
+static double pick_log(fz_reader *r, double lo, double hi)
+{
+    return fz_log_range(r, lo, hi);
+}
+
+/* Strictly increasing table of n breakpoints from lo with steps in [0.1, 50]. */
+static void table_x(fz_reader *r, gs_real *x, int n, double lo)
+{
+    double v = lo;
+    for (int i = 0; i < n; ++i) {
+        x[i] = (gs_real)v;
+        v += fz_log_range(r, 0.1, 50.0);
+    }
+}
+
+static gs_real eff(fz_reader *r)
+{
+    return (gs_real)fz_range(r, 0.2, 1.0);
+}
+
+static void set_backlash(fz_reader *r, gs_backlash_params *b, uint8_t cfg, int gear)
+{
+    b->enabled = 1;
+    b->hard_stop_model = (gs_hard_stop_model)(cfg % 3U);
+    b->linear_backlash_m = (gs_real)pick_log(r, 1e-6, 1e-2);
+    if (gear) {
+        b->base_radius_m = (gs_real)pick_log(r, 1e-3, 1.0);
+    }
+    b->transition_region_m = (gs_real)((double)b->linear_backlash_m * fz_log_range(r, 1e-3, 0.5));
+    b->stiffness_N_m = (gs_real)pick_log(r, 1e3, 1e9);
+    b->damping_N_s_m = (fz_u8(r) & 7U) == 0 ? (gs_real)0.0 : (gs_real)pick_log(r, 1e-2, 1e5);
+    b->initial_position_m = (gs_real)(0.5 * (double)b->linear_backlash_m * fz_range(r, -1.0, 1.0));
+    b->no_pull = (cfg >> 2) & 1U;
+    b->lock_enabled = (cfg >> 3) & 1U;
+    b->contact_speed_threshold_m_s = (gs_real)pick_log(r, 1e-6, 1e-1);
+    b->contact_release_force_N = (fz_u8(r) & 3U) == 0 ? (gs_real)0.0 : (gs_real)pick_log(r, 1e-3, 1e3);
+}
+
+static gs_status build(fz_reader *r, gs_rig *rig, rig_info *info)
+{
+    const uint8_t c0 = fz_u8(r), c1 = fz_u8(r), c2 = fz_u8(r), c3 = fz_u8(r);
+    gs_rig_params rp = gs_rig_params_default();
+    rp.dt_s = (gs_real)pick_log(r, 1e-5, 1e-2);
+    rp.base_drive = (c0 & 2U) ? GS_BASE_TORQUE_DRIVEN : GS_BASE_SPEED_DRIVEN;
+    rp.base_inertia_kg_m2 = (rp.base_drive == GS_BASE_TORQUE_DRIVEN || (c2 & 1U))
+                                ? (gs_real)pick_log(r, 1e-6, 1e1) : (gs_real)0.0;
+    rp.initial_base_speed_rad_s = (gs_real)fz_range(r, -100.0, 100.0);
+    rp.driven_inertia = (gs_real)pick_log(r, 1e-6, 1e2);
+    rp.load_coulomb_friction = (c2 & 2U) ? (gs_real)pick_log(r, 1e-3, 1e2) : (gs_real)0.0;
+    rp.load_coulomb_speed_threshold = (gs_real)pick_log(r, 1e-4, 1.0);
+    rp.load_offset = (gs_real)fz_range(r, -10.0, 10.0);
+    rp.heat_path = (c2 >> 2) & 1U;
+    rp.thermal_resistance_K_W = (gs_real)pick_log(r, 1e-2, 1e2);
+    rp.temperature_source = (c2 & 8U) ? GS_TEMPERATURE_FROM_INPUT : GS_TEMPERATURE_FROM_MODEL;
+    rp.accel_filter_time_constant_s = (c2 & 16U) ? (gs_real)pick_log(r, 1e-4, 1e-1) : (gs_real)0.0;
+    rp.contact_substeps = (c2 & 32U) ? (int)(fz_u8(r) % (GS_MAX_SUBSTEPS + 1)) : 0;
+    const gs_loss_smoothing smoothing = (c0 & 8U) ? GS_SMOOTHING_SIMSCAPE : GS_SMOOTHING_PASSIVE;
+    const double thermal_mass = pick_log(r, 1e-6, 1e3);
+    info->gear = !(c0 & 1U);
+    info->backlash = (c0 >> 2) & 1U;
+    info->passive = smoothing == GS_SMOOTHING_PASSIVE;
+    info->friction = GS_FRICTION_NONE;
+    gs_error err;
+    gs_status st;
+    if (info->gear) {
+        gs_simple_gear_params g = gs_simple_gear_params_default();
+        g.teeth_ratio = (gs_real)pick_log(r, 1e-3, 1e3);
+        g.output_shaft_rotates = (c0 & 16U) ? GS_ROTATES_SAME : GS_ROTATES_OPPOSITE;
+        g.friction_model = (gs_friction_model)(c1 % 5U);
+        g.loss_smoothing = smoothing;
+        g.efficiency_const = eff(r);
+        g.power_threshold_W = (gs_real)pick_log(r, 1e-6, 1e2);
+        g.nominal_output_torque_Nm = (gs_real)pick_log(r, 1e-2, 1e3);
+        g.efficiency_nominal = (gs_real)fz_range(r, 0.3, 0.99);
+        /* idle torque within the k >= 0 limit of eq. 2.5 */
+        const double k_max = (1.0 / (double)g.efficiency_nominal - 1.0) * (double)g.nominal_output_torque_Nm
+                             / (double)g.teeth_ratio;
+        g.idle_torque_Nm = (gs_real)(0.999 * k_max * fz_range(r, 0.0, 1.0));
+        g.speed_threshold_rad_s = (gs_real)pick_log(r, 1e-4, 1.0);
+        g.temperature_count = 2 + (int)((c1 >> 3) % (GS_TABLE_MAX - 1));
+        g.load_count = 2 + (int)((c3 >> 4) % (GS_TABLE_MAX - 1));
+        table_x(r, g.temperature_vector_K, g.temperature_count, fz_range(r, 200.0, 300.0));
+        table_x(r, g.load_vector_Nm, g.load_count, 0.0);
+        for (int i = 0; i < g.temperature_count; ++i) {
+            g.efficiency_vector[i] = eff(r);
+            for (int j = 0; j < g.load_count; ++j) {
+                g.efficiency_matrix[i][j] = eff(r);
+            }
+        }
+        g.viscous_coefficients[0] = (c3 & 1U) ? (gs_real)pick_log(r, 1e-6, 1.0) : (gs_real)0.0;
+        g.viscous_coefficients[1] = (c3 & 2U) ? (gs_real)pick_log(r, 1e-6, 1.0) : (gs_real)0.0;
+        g.thermal_mass_J_K = (gs_real)thermal_mass;
+        g.initial_temperature_K = (gs_real)fz_range(r, 250.0, 350.0);
+        if (info->backlash) {
+            set_backlash(r, &g.backlash, c3 >> 2, 1);
+        }
+        info->friction = g.friction_model;
+        st = gs_rig_init_gear(rig, &g, &rp, &err);
+        if (getenv("FZ_VERBOSE") != NULL) {
+            fz_dump("gear", &g, fz_gear_fields, FZ_COUNT(fz_gear_fields));
+            fz_dump("rp", &rp, fz_rig_fields, FZ_COUNT(fz_rig_fields));
+        }
+        info->r_base = (double)g.backlash.base_radius_m;
+        info->r_follow = (double)g.teeth_ratio * (double)g.backlash.base_radius_m;
+    } else {
+        static const gs_friction_model rack_models[3] = {GS_FRICTION_NONE, GS_FRICTION_CONSTANT_EFFICIENCY,
+                                                         GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY};
+        gs_rack_pinion_params k = gs_rack_pinion_params_default();
+        k.parameterization = (c0 & 16U) ? GS_PARAMETERIZE_TOOTH_PARAMETERS : GS_PARAMETERIZE_PINION_RADIUS;
+        k.pinion_radius_m = (gs_real)pick_log(r, 1e-3, 1.0);
+        k.teeth_count = (gs_real)(5 + fz_u8(r) % 100U);
+        k.spacing_m = (gs_real)pick_log(r, 1e-4, 1e-2);
+        k.rack_directionality = (c0 & 32U) ? GS_RACK_NEGATIVE : GS_RACK_POSITIVE;
+        k.friction_model = rack_models[c1 % 3U];
+        k.loss_smoothing = smoothing;
+        k.efficiency_const = eff(r);
+        k.temperature_count = 2 + (int)((c1 >> 3) % (GS_TABLE_MAX - 1));
+        table_x(r, k.temperature_vector_K, k.temperature_count, fz_range(r, 200.0, 300.0));
+        for (int i = 0; i < k.temperature_count; ++i) {
+            k.efficiency_vector[i] = eff(r);
+        }
+        k.power_threshold_W = (gs_real)pick_log(r, 1e-6, 1e2);
+        k.pinion_viscous_coefficient = (c3 & 1U) ? (gs_real)pick_log(r, 1e-6, 1.0) : (gs_real)0.0;
+        k.rack_viscous_coefficient = (c3 & 2U) ? (gs_real)pick_log(r, 1e-4, 1e2) : (gs_real)0.0;
+        k.thermal_mass_J_K = (gs_real)thermal_mass;
+        k.initial_temperature_K = (gs_real)fz_range(r, 250.0, 350.0);
+        if (info->backlash) {
+            set_backlash(r, &k.backlash, c3 >> 2, 0);
+        }
+        info->friction = k.friction_model;
+        st = gs_rig_init_rack(rig, &k, &rp, &err);
+        if (getenv("FZ_VERBOSE") != NULL) {
+            fz_dump("rack", &k, fz_rack_fields, FZ_COUNT(fz_rack_fields));
+            fz_dump("rp", &rp, fz_rig_fields, FZ_COUNT(fz_rig_fields));
+        }
+        info->r_base = (double)gs_rack_pinion_radius(&k);
+        info->r_follow = 1.0;
+    }
+    FZ_CHECK(st == GS_OK, "generated parameters rejected: %s: %s", err.parameter, err.message);
+    if (getenv("FZ_VERBOSE") != NULL) {
+        const gs_mesh_ *m = &rig->mesh;
+        fprintf(stderr,
+                "rig: %s, %s-driven, friction %d (%s), backlash %d (hard stop %d, no_pull %d, lock %d), "
+                "dt %.9g, substeps %d, ratio %.9g, r_B %.9g, r_F %.9g, half gap %.9g, 1/d %.9g, K %.9g, D %.9g, "
+                "x0 %.9g, J_B %.9g, J_F %.9g, mu %.9g %.9g, eta %.9g, p_th %.9g, load coulomb %.9g / %.9g, "
+                "offset %.9g, heat path %d, T source %d\n",
+                info->gear ? "gear" : "rack", rig->base_drive == GS_BASE_SPEED_DRIVEN ? "speed" : "torque",
+                (int)m->friction, info->passive ? "passive" : "simscape", m->backlash, (int)m->hard_stop, m->no_pull,
+                m->lock_enabled, (double)rig->dt, rig->substeps, (double)m->ratio, (double)m->base_radius,
+                (double)m->follower_radius, (double)m->half_gap, (double)m->inv_transition, (double)m->stiffness,
+                (double)m->damping, (double)m->initial_position, (double)rig->base_inertia,
+                (double)rig->driven_inertia, (double)m->mu_base, (double)m->mu_follower, (double)m->eta,
+                (double)m->power_threshold, (double)rig->load_coulomb,
+                1.0 / (double)rig->inv_load_speed_threshold, (double)rig->load_offset, rig->heat_path,
+                (int)rig->temperature_source);
+        fprintf(stderr, "  lock speed %.9g, release %.9g, T0 %.9g, C_th %.9g, 1/R_th %.9g, accel gain %.9g, "
+                "initial base speed %.9g\n", (double)m->lock_speed, (double)m->lock_release_force,
+                (double)m->initial_temperature, (double)m->thermal_mass, (double)rig->inv_thermal_resistance,
+                (double)rig->accel_gain, (double)rig->initial_base_speed);
+    }
+    return st;
+}
+
+/* One input value: zero, uniform in [-hi, hi], or +-10^u (u over 9 decades below hi). */
+static gs_real input_value(fz_reader *r, double lo, double hi)
+{
+    const uint8_t a = fz_u8(r);
+    const uint8_t b = fz_u8(r);
+    const double u = (double)(a >> 2 | (unsigned)b << 6) / 16383.0;
+    switch (a & 3U) {
+    case 0:
+        return (gs_real)(lo >= 0.0 ? lo : 0.0);
+    case 1:
+        return (gs_real)(lo + (hi - lo) * u);
+    default: {
+        const double m = hi * pow(10.0, -9.0 * u);
+        const double v = ((a & 3U) == 2 || lo >= 0.0) ? m : -m;
+        return (gs_real)(v < lo ? lo : v);
+    }
+    }
+}
+
+static int same_bits(const gs_rig_output *a, const gs_rig_output *b)
+{
+    return memcmp(a, b, sizeof *a) == 0;
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    fz_reader r = {data, size};
+    gs_rig rig;
+    rig_info info;
+    if (build(&r, &rig, &info) != GS_OK) {
+        return 0;
+    }
+    const double eps = FZ_EPS;
+    const double dt = (double)rig.dt;
+    /* Conditioning of the backward-Euler contact solve: kappa = c*(K*h + D)
+     * with c = h/m_eff. When kappa*eps approaches 1 (float, stiff contact on a
+     * light side), the impulse balance loses its significant digits: known
+     * limit L2 (docs/hardening.md). Without -DFZ_STRICT such rigs are still
+     * stepped (no crash, no UB) but their outputs are not checked. */
+    const double h_sub0 = dt / (double)rig.substeps;
+    const double kappa = info.backlash ? h_sub0 * (double)rig.inv_eff_mass_contact
+                                             * ((double)rig.mesh.stiffness * h_sub0 + (double)rig.mesh.damping)
+                                       : 0.0;
+    const int checked = FZ_STRICT_ENERGY || kappa * eps <= 1e-4;
+    gs_rig shadow = rig;
+    gs_rig batch = rig;
+    gs_rig_input inputs[MAX_STEPS];
+    gs_rig_output outputs[MAX_STEPS];
+    double energy_before = 0.0;
+    int k = 0;
+    for (; k < MAX_STEPS && r.n >= 10; ++k) {
+        gs_rig_input *in = &inputs[k];
+        in->base_speed_rad_s = input_value(&r, -1e3, 1e3);
+        in->base_torque_Nm = input_value(&r, -1e3, 1e3);
+        in->load = input_value(&r, -1e3, 1e3);
+        in->ambient_temperature_K = input_value(&r, 1.0, 1e3);
+        in->measured_temperature_K = input_value(&r, 1.0, 1e3);
+        gs_rig_output *o = &outputs[k];
+        gs_rig_step(&rig, in, o);
+        if (getenv("FZ_VERBOSE") != NULL) {
+            fprintf(stderr, "step %d in: w_B %.17g tau_m %.17g load %.17g T_amb %.17g T_meas %.17g\n  out:", k,
+                    (double)in->base_speed_rad_s, (double)in->base_torque_Nm, (double)in->load,
+                    (double)in->ambient_temperature_K, (double)in->measured_temperature_K);
+            for (int i = 0; i < GS_RIG_OUTPUT_FIELDS; ++i) {
+                fprintf(stderr, " %.9g", (double)(&o->base_torque_Nm)[i]);
+            }
+            fprintf(stderr, "\n");
+        }
+        gs_rig_output o2;
+        gs_rig_step(&shadow, in, &o2);
+        FZ_CHECK(same_bits(o, &o2), "a snapshot copy stepped differently at step %d", k);
+        if (!checked) {
+            continue;
+        }
+        const gs_real *v = &o->base_torque_Nm;
+        for (int i = 0; i < GS_RIG_OUTPUT_FIELDS; ++i) {
+            FZ_CHECK(fz_finite(v[i]), "output field %d = %g at step %d (kappa %.3g)", i, (double)v[i], k, kappa);
+        }
+
+        const double port = (double)o->port_power_W;
+        const double loss = (double)o->loss_power_W;
+        const double w_b = fabs((double)o->base_speed_rad_s);
+        const double w_f = fabs((double)o->driven_speed);
+        /* magnitude of the terms whose rounding the balance carries */
+        const double scale = fabs((double)o->base_port_torque_Nm) * w_b
+                             + fabs((double)o->driven_port_torque) * w_f + fabs(loss) + fabs(port)
+                             + fabs((double)o->contact_force_N) * (info.r_base * w_b + info.r_follow * w_f);
+        /* With backlash the relative tooth speed is the difference of the free
+         * speeds that the contact and external impulses produce in a sub-step;
+         * on a light side those are much larger than the step's speeds, and
+         * their rounding multiplies the contact force. */
+        const double f_abs = fabs((double)o->contact_force_N);
+        const double h_sub = dt / (double)rig.substeps;
+        const double f_ext = (fabs((double)in->load) + fabs((double)rig.load_offset) + (double)rig.load_coulomb)
+                                 / info.r_follow
+                             + (rig.base_drive == GS_BASE_TORQUE_DRIVEN ? fabs((double)in->base_torque_Nm) / info.r_base
+                                                                        : 0.0);
+        const double impulse_scale = info.backlash ? f_abs * (f_abs + f_ext) * h_sub * (double)rig.inv_eff_mass_contact
+                                                   : 0.0;
+        if (!info.backlash) {
+            FZ_CHECK(fabs(port - loss) <= 64.0 * eps * scale + 1e-300,
+                     "rigid mesh: port_power %.9g != loss_power %.9g (scale %.3g) at step %d", port, loss,
+                     scale, k);
+            if (info.passive) {
+                FZ_CHECK(loss >= -64.0 * eps * scale,
+                         "rigid mesh: loss_power %.9g < 0 (scale %.3g) at step %d", loss, scale, k);
+            }
+        } else if (info.passive && (FZ_STRICT_ENERGY || info.friction == GS_FRICTION_NONE)) {
+            /* Simscape smoothing is documented as slightly active: no energy
+             * bound there. Known issue K1 (docs/hardening.md): with backlash the
+             * meshing loss is explicit per sub-step and reported at the
+             * start-of-sub-step speed, which can create energy; until it is
+             * fixed the bound is checked on frictionless meshes only, unless
+             * built with -DFZ_STRICT. */
+            const double energy = (double)o->contact_energy_J;
+            const double created = (loss - port) * dt + (energy - energy_before);
+            /* The backlash position is stored absolute: a sub-step's motion
+             * below ulp(x) is lost while the ports still see it (float: x ~ b/2
+             * resolves a stiff contact's penetration to a few hundred ulp). */
+            const double f_spring = sqrt(2.0 * (double)rig.mesh.stiffness * fmax(energy, energy_before));
+            const double quantum = 4.0 * (f_abs + f_spring) * eps * (fabs((double)o->backlash_position_m)
+                                                        + (double)rig.mesh.half_gap) * (double)rig.substeps
+                                   /* and the position moves by the rounding of the relative speed
+                                    * r_B*w_B - r_F*w_F (locked teeth), against the spring */
+                                   + 4.0 * f_spring * eps * (info.r_base * w_b + info.r_follow * w_f) * dt;
+            const double tol = 1024.0 * eps * ((scale + impulse_scale) * dt + energy + energy_before) + quantum
+                               + 1e-300;
+            FZ_CHECK(created <= tol,
+                     "backlash: energy created %.9g J > tol %.3g (port %.9g W, loss %.9g W, dt %g, E %.9g -> %.9g J)"
+                     " at step %d",
+                     created, tol, port, loss, dt, energy_before, energy, k);
+            energy_before = energy;
+        }
+    }
+    if (k > 0) {
+        gs_rig_output run_out[MAX_STEPS];
+        gs_rig_run(&batch, (size_t)k, inputs, run_out);
+        FZ_CHECK(memcmp(run_out, outputs, (size_t)k * sizeof outputs[0]) == 0,
+                 "gs_rig_run differs from %d gs_rig_step calls", k);
+    }
+    return 0;
+}
