@@ -35,6 +35,9 @@ gs_status gs_mesh_set_backlash(gs_mesh_ *m, const gs_backlash_params *p, gs_real
         if (!(p->transition_region_m > GS_R(0.0))) {
             return gs_fail(err, GS_E_TRANSITION_REGION, "transition_region");
         }
+        if ((s = gs_check_invertible(err, p->transition_region_m, "transition_region")) != GS_OK) {
+            return s;
+        }
     }
     const gs_real half_gap = GS_R(0.5) * p->linear_backlash_m;
     if (p->initial_position_m < -half_gap || p->initial_position_m > half_gap) {
@@ -67,7 +70,7 @@ gs_status gs_mesh_set_thermal(gs_mesh_ *m, gs_real thermal_mass, gs_real initial
                           m->friction == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY);
     gs_status s;
     if (m->thermal_enabled) {
-        if ((s = gs_check_positive(err, thermal_mass, "thermal_mass")) != GS_OK ||
+        if ((s = gs_check_invertible(err, thermal_mass, "thermal_mass")) != GS_OK ||
             (s = gs_check_positive(err, initial_temperature, "initial_temperature")) != GS_OK) {
             return s;
         }

@@ -54,10 +54,10 @@ gs_status gs_rack_pinion_mesh(gs_mesh_ *mesh, const gs_rack_pinion_params *p, gs
     gs_status s;
     switch (p->parameterization) {
     case GS_PARAMETERIZE_PINION_RADIUS:
-        s = gs_check_positive(err, p->pinion_radius_m, "pinion_radius");
+        s = gs_check_invertible(err, p->pinion_radius_m, "pinion_radius");
         break;
     case GS_PARAMETERIZE_TOOTH_PARAMETERS:
-        if ((s = gs_check_positive(err, p->teeth_count, "teeth_count")) == GS_OK) {
+        if ((s = gs_check_invertible(err, p->teeth_count, "teeth_count")) == GS_OK) {
             s = gs_check_positive(err, p->spacing_m, "spacing");
         }
         break;
@@ -86,7 +86,7 @@ gs_status gs_rack_pinion_mesh(gs_mesh_ *mesh, const gs_rack_pinion_params *p, gs
         break;
     case GS_FRICTION_CONSTANT_EFFICIENCY:
         if ((s = gs_check_efficiency(err, p->efficiency_const, "efficiency_const")) != GS_OK ||
-            (s = gs_check_positive(err, p->power_threshold_W, "power_threshold")) != GS_OK) {
+            (s = gs_check_invertible(err, p->power_threshold_W, "power_threshold")) != GS_OK) {
             return s;
         }
         break;
@@ -95,7 +95,7 @@ gs_status gs_rack_pinion_mesh(gs_mesh_ *mesh, const gs_rack_pinion_params *p, gs
                                       "temperature_vector")) != GS_OK ||
             (s = gs_check_efficiencies(err, p->efficiency_vector, p->temperature_count,
                                        p->temperature_count, "efficiency_vector")) != GS_OK ||
-            (s = gs_check_positive(err, p->power_threshold_W, "power_threshold")) != GS_OK) {
+            (s = gs_check_invertible(err, p->power_threshold_W, "power_threshold")) != GS_OK) {
             return s;
         }
         break;
@@ -109,6 +109,10 @@ gs_status gs_rack_pinion_mesh(gs_mesh_ *mesh, const gs_rack_pinion_params *p, gs
         return s;
     }
     const gs_real radius = gs_rack_pinion_radius(p);
+    if ((s = gs_check_invertible(err, radius, p->parameterization == GS_PARAMETERIZE_TOOTH_PARAMETERS
+                                                  ? "spacing" : "pinion_radius")) != GS_OK) {
+        return s;
+    }
     gs_mesh_ m;
     memset(&m, 0, sizeof m);
     m.ratio = direction / radius;

@@ -47,12 +47,15 @@ static gs_status check_rig(const gs_rig_params *p, gs_rig_block block, gs_error 
     if (!gs_is_finite(p->dt_s) || !(p->dt_s > GS_R(0.0))) {
         return gs_fail(err, GS_E_STEP_SIZE, "dt");
     }
+    if ((s = gs_check_invertible(err, p->dt_s, "dt")) != GS_OK) {
+        return s;
+    }
     switch (p->base_drive) {
     case GS_BASE_SPEED_DRIVEN:
         s = gs_check_nonnegative(err, p->base_inertia_kg_m2, "base_inertia");
         break;
     case GS_BASE_TORQUE_DRIVEN:
-        s = gs_check_positive(err, p->base_inertia_kg_m2, "base_inertia");
+        s = gs_check_invertible(err, p->base_inertia_kg_m2, "base_inertia");
         break;
     default:
         return gs_fail(err, GS_E_OPTION, "base_drive");
@@ -69,14 +72,14 @@ static gs_status check_rig(const gs_rig_params *p, gs_rig_block block, gs_error 
     }
     const char *driven_name = block == GS_RIG_SIMPLE_GEAR ? "follower_inertia" : "rack_mass";
     if ((s = gs_check_finite(err, p->initial_base_speed_rad_s, "initial_base_speed")) != GS_OK ||
-        (s = gs_check_positive(err, p->driven_inertia, driven_name)) != GS_OK ||
+        (s = gs_check_invertible(err, p->driven_inertia, driven_name)) != GS_OK ||
         (s = gs_check_nonnegative(err, p->load_coulomb_friction, "load_coulomb_friction")) != GS_OK ||
-        (s = gs_check_positive(err, p->load_coulomb_speed_threshold, "load_coulomb_speed_threshold")) != GS_OK ||
+        (s = gs_check_invertible(err, p->load_coulomb_speed_threshold, "load_coulomb_speed_threshold")) != GS_OK ||
         (s = gs_check_finite(err, p->load_offset, "load_offset")) != GS_OK ||
         (s = gs_check_nonnegative(err, p->accel_filter_time_constant_s, "accel_filter_time_constant")) != GS_OK) {
         return s;
     }
-    if (p->heat_path && (s = gs_check_positive(err, p->thermal_resistance_K_W, "thermal_resistance")) != GS_OK) {
+    if (p->heat_path && (s = gs_check_invertible(err, p->thermal_resistance_K_W, "thermal_resistance")) != GS_OK) {
         return s;
     }
     if (p->contact_substeps < 0 || p->contact_substeps > GS_MAX_SUBSTEPS) {
@@ -112,49 +115,46 @@ static int automatic_substeps(const gs_rig *r)
     return n;
 }
 
-static gs_status rig_setup(gs_rig *rig, const gs_mesh_ *mesh, gs_rig_block block,
-                           const gs_rig_params *p, gs_error *err)
+/* Fills the rig around an already validated mesh; the rig parameters were
+ * checked by check_rig. Writes in place: no second rig on the stack. */
+static void rig_fill(gs_rig *r, gs_rig_block block, const gs_rig_params *p)
 {
-    gs_status s = check_rig(p, block, err);
-    if (s != GS_OK) {
-        return s;
+    r->block = block;
+    r->dt = p->dt_s;
+    r->base_drive = p->base_drive;
+    r->base_inertia = p->base_inertia_kg_m2;
+    r->initial_base_speed = p->initial_base_speed_rad_s;
+    r->driven_inertia = p->driven_inertia;
+    r->load_coulomb = p->load_coulomb_friction;
+    r->inv_load_speed_threshold = GS_R(1.0) / p->load_coulomb_speed_threshold;
+    r->load_offset = p->load_offset;
+    r->heat_path = p->heat_path ? 1 : 0;
+    r->inv_thermal_resistance = r->heat_path ? GS_R(1.0) / p->thermal_resistance_K_W : GS_R(0.0);
+    r->temperature_source = p->temperature_source;
+    r->accel_gain = p->dt_s / (p->accel_filter_time_constant_s + p->dt_s);
+    r->substeps = 1;
+    r->inv_eff_mass_contact = GS_R(0.0);
+    if (r->mesh.backlash) {
+        r->substeps = p->contact_substeps > 0 ? p->contact_substeps : automatic_substeps(r);
+        r->inv_eff_mass_contact = contact_inverse_mass(r, r->dt / (gs_real)r->substeps);
     }
-    gs_rig r;
-    memset(&r, 0, sizeof r);
-    r.mesh = *mesh;
-    r.block = block;
-    r.dt = p->dt_s;
-    r.base_drive = p->base_drive;
-    r.base_inertia = p->base_inertia_kg_m2;
-    r.initial_base_speed = p->initial_base_speed_rad_s;
-    r.driven_inertia = p->driven_inertia;
-    r.load_coulomb = p->load_coulomb_friction;
-    r.inv_load_speed_threshold = GS_R(1.0) / p->load_coulomb_speed_threshold;
-    r.load_offset = p->load_offset;
-    r.heat_path = p->heat_path ? 1 : 0;
-    r.inv_thermal_resistance = r.heat_path ? GS_R(1.0) / p->thermal_resistance_K_W : GS_R(0.0);
-    r.temperature_source = p->temperature_source;
-    r.accel_gain = p->dt_s / (p->accel_filter_time_constant_s + p->dt_s);
-    r.substeps = 1;
-    if (r.mesh.backlash) {
-        r.substeps = p->contact_substeps > 0 ? p->contact_substeps : automatic_substeps(&r);
-        r.inv_eff_mass_contact = contact_inverse_mass(&r, r.dt / (gs_real)r.substeps);
-    }
-    gs_rig_reset(&r);
-    *rig = r;
-    gs_error_clear(err);
-    return GS_OK;
+    gs_rig_reset(r);
 }
 
+/* The rig parameters are checked first, so that once the block's mesh is
+ * validated (and only then written into the rig) nothing can fail: a failed
+ * init leaves the rig unchanged. */
 gs_status gs_rig_init_gear(gs_rig *rig, const gs_simple_gear_params *gear,
                            const gs_rig_params *params, gs_error *err)
 {
     if (rig == NULL || gear == NULL || params == NULL) {
         return gs_fail(err, GS_E_NULL, rig == NULL ? "rig" : (gear == NULL ? "gear" : "params"));
     }
-    gs_mesh_ mesh;
-    const gs_status s = gs_simple_gear_mesh(&mesh, gear, err);
-    return s != GS_OK ? s : rig_setup(rig, &mesh, GS_RIG_SIMPLE_GEAR, params, err);
+    gs_status s = check_rig(params, GS_RIG_SIMPLE_GEAR, err);
+    if (s == GS_OK && (s = gs_simple_gear_mesh(&rig->mesh, gear, err)) == GS_OK) {
+        rig_fill(rig, GS_RIG_SIMPLE_GEAR, params);
+    }
+    return s;
 }
 
 gs_status gs_rig_init_rack(gs_rig *rig, const gs_rack_pinion_params *rack,
@@ -163,9 +163,11 @@ gs_status gs_rig_init_rack(gs_rig *rig, const gs_rack_pinion_params *rack,
     if (rig == NULL || rack == NULL || params == NULL) {
         return gs_fail(err, GS_E_NULL, rig == NULL ? "rig" : (rack == NULL ? "rack" : "params"));
     }
-    gs_mesh_ mesh;
-    const gs_status s = gs_rack_pinion_mesh(&mesh, rack, err);
-    return s != GS_OK ? s : rig_setup(rig, &mesh, GS_RIG_RACK_PINION, params, err);
+    gs_status s = check_rig(params, GS_RIG_RACK_PINION, err);
+    if (s == GS_OK && (s = gs_rack_pinion_mesh(&rig->mesh, rack, err)) == GS_OK) {
+        rig_fill(rig, GS_RIG_RACK_PINION, params);
+    }
+    return s;
 }
 
 void gs_rig_reset(gs_rig *rig)

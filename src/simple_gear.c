@@ -78,7 +78,7 @@ static gs_status check_friction(const gs_simple_gear_params *p, gs_error *err)
         if ((s = gs_check_efficiency(err, p->efficiency_const, "efficiency_const")) != GS_OK) {
             return s;
         }
-        s = gs_check_positive(err, p->power_threshold_W, "power_threshold");
+        s = gs_check_invertible(err, p->power_threshold_W, "power_threshold");
         break;
     case GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY: {
         if ((s = gs_check_nonnegative(err, p->idle_torque_Nm, "idle_torque")) != GS_OK ||
@@ -94,7 +94,7 @@ static gs_status check_friction(const gs_simple_gear_params *p, gs_error *err)
         if (k < GS_R(0.0)) {
             return gs_fail(err, GS_E_IDLE_TORQUE_TOO_LARGE, "idle_torque");
         }
-        s = gs_check_positive(err, p->speed_threshold_rad_s, "speed_threshold");
+        s = gs_check_invertible(err, p->speed_threshold_rad_s, "speed_threshold");
         break;
     }
     case GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY:
@@ -104,7 +104,7 @@ static gs_status check_friction(const gs_simple_gear_params *p, gs_error *err)
                                        p->temperature_count, "efficiency_vector")) != GS_OK) {
             return s;
         }
-        s = gs_check_positive(err, p->power_threshold_W, "power_threshold");
+        s = gs_check_invertible(err, p->power_threshold_W, "power_threshold");
         break;
     case GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY:
         if ((s = gs_check_breakpoints(err, p->temperature_vector_K, p->temperature_count, 0,
@@ -118,7 +118,7 @@ static gs_status check_friction(const gs_simple_gear_params *p, gs_error *err)
                 return s;
             }
         }
-        s = gs_check_positive(err, p->speed_threshold_rad_s, "speed_threshold");
+        s = gs_check_invertible(err, p->speed_threshold_rad_s, "speed_threshold");
         break;
     default:
         s = gs_fail(err, GS_E_OPTION, "friction_model");
@@ -133,7 +133,7 @@ gs_status gs_simple_gear_mesh(gs_mesh_ *mesh, const gs_simple_gear_params *p, gs
         return gs_fail(err, GS_E_NULL, p == NULL ? "params" : "gear");
     }
     gs_status s;
-    if ((s = gs_check_positive(err, p->teeth_ratio, "teeth_ratio")) != GS_OK) {
+    if ((s = gs_check_invertible(err, p->teeth_ratio, "teeth_ratio")) != GS_OK) {
         return s;
     }
     gs_real direction;

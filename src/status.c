@@ -22,6 +22,7 @@ const char *gs_status_str(gs_status status)
     case GS_E_TRANSITION_REGION: return "transition region must be greater than zero";
     case GS_E_STEP_SIZE: return "step size must be finite and greater than zero";
     case GS_E_SUBSTEPS: return "contact sub-steps must lie in [0, GS_MAX_SUBSTEPS]";
+    case GS_E_MAGNITUDE: return "value is so small that its reciprocal overflows";
     }
     return "unknown status";
 }

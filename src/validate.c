@@ -30,6 +30,15 @@ gs_status gs_check_positive(gs_error *err, gs_real value, const char *parameter)
     return value > GS_R(0.0) ? GS_OK : gs_fail(err, GS_E_NOT_POSITIVE, parameter);
 }
 
+gs_status gs_check_invertible(gs_error *err, gs_real value, const char *parameter)
+{
+    const gs_status s = gs_check_positive(err, value, parameter);
+    if (s != GS_OK) {
+        return s;
+    }
+    return gs_is_finite(GS_R(1.0) / value) ? GS_OK : gs_fail(err, GS_E_MAGNITUDE, parameter);
+}
+
 gs_status gs_check_nonnegative(gs_error *err, gs_real value, const char *parameter)
 {
     if (!gs_is_finite(value)) {

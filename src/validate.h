@@ -9,6 +9,8 @@ gs_status gs_fail(gs_error *err, gs_status status, const char *parameter);
 void gs_error_clear(gs_error *err);
 gs_status gs_check_finite(gs_error *err, gs_real value, const char *parameter);
 gs_status gs_check_positive(gs_error *err, gs_real value, const char *parameter);
+/* > 0 and 1/value finite: for parameters the model divides by. */
+gs_status gs_check_invertible(gs_error *err, gs_real value, const char *parameter);
 gs_status gs_check_nonnegative(gs_error *err, gs_real value, const char *parameter);
 gs_status gs_check_efficiency(gs_error *err, gs_real value, const char *parameter);
 /* Breakpoints: 2 <= n <= GS_TABLE_MAX, finite, strictly increasing, and

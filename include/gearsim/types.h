@@ -56,7 +56,8 @@ typedef enum {
     GS_E_BACKLASH_POSITION = -12,   /* initial position outside [-b/2, b/2] */
     GS_E_TRANSITION_REGION = -13,   /* smooth model: 0 < d required */
     GS_E_STEP_SIZE = -14,           /* rig step dt must be > 0 and finite */
-    GS_E_SUBSTEPS = -15             /* contact sub-step count out of [0, GS_MAX_SUBSTEPS] */
+    GS_E_SUBSTEPS = -15,            /* contact sub-step count out of [0, GS_MAX_SUBSTEPS] */
+    GS_E_MAGNITUDE = -16            /* so small that its reciprocal overflows gs_real */
 } gs_status;
 
 /* Returns a static, human-readable description of a status (never NULL). */
