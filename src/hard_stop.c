@@ -107,13 +107,19 @@ gs_real gs_contact_solve(gs_mesh_ *m, gs_real x, gs_real u_free, gs_real h, gs_r
     }
     const gs_real f0 = contact_force_d(m, x + h * u_free, u_free, h, &dfdu, f_spring);
     gs_real u = u_free;
+    *force = f0; /* teeth apart: no force; f_spring is that of u_free */
     if (f0 > GS_R(0.0) || f0 < GS_R(0.0)) {
         /* Phi(u) = u - u_free + c*f(u) is increasing when f is non-decreasing in
          * u; its root lies between u_free and u_free - c*f0. */
         gs_real lo = f0 > GS_R(0.0) ? u_free - c * f0 : u_free;
         gs_real hi = f0 > GS_R(0.0) ? u_free : u_free - c * f0;
+        gs_real f = f0;          /* f, dfdu and f_spring at u */
+        int evaluated_at_u = 1;
         for (int i = 0; i < NEWTON_ITERATIONS; ++i) {
-            const gs_real f = contact_force_d(m, x + h * u, u, h, &dfdu, f_spring);
+            if (!evaluated_at_u) {
+                f = contact_force_d(m, x + h * u, u, h, &dfdu, f_spring);
+                evaluated_at_u = 1;
+            }
             const gs_real phi = u - u_free + c * f;
             if (phi > GS_R(0.0)) {
                 hi = u;
@@ -134,14 +140,17 @@ gs_real gs_contact_solve(gs_mesh_ *m, gs_real x, gs_real u_free, gs_real h, gs_r
                 next = GS_R(0.5) * (lo + hi);
             }
             u = next;
+            evaluated_at_u = 0;
         }
+        /* The force consistent with the impulse balance. At a root it equals
+         * f(u); where the contact law jumps (damping at first contact) Phi has no
+         * root and this picks the force inside the jump that stops the closing
+         * motion there, instead of the full jump value. */
+        if (!evaluated_at_u) {
+            (void)contact_force_d(m, x + h * u, u, h, &dfdu, f_spring);
+        }
+        *force = (u_free - u) / c;
     }
-    /* The force consistent with the impulse balance. At a root it equals
-     * f(u); where the contact law jumps (damping at first contact) Phi has no
-     * root and this picks the force inside the jump that stops the closing
-     * motion there, instead of the full jump value. */
-    const gs_real f_end = contact_force_d(m, x + h * u, u, h, &dfdu, f_spring);
-    *force = (f0 > GS_R(0.0) || f0 < GS_R(0.0)) ? (u_free - u) / c : f_end;
     if (m->lock_enabled && gs_abs(x + h * u) >= m->half_gap && gs_abs(u) < m->lock_speed) {
         m->locked = 1;
     }

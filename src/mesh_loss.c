@@ -12,17 +12,20 @@ void gs_mesh_loss_prepare(const gs_mesh_ *m, gs_real temperature, gs_loss_ctx_ *
     case GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY:
         eta = gs_interp1(m->eta_of_T.x, m->eta_of_T.y, m->eta_of_T.n, temperature);
         break;
-    case GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY:
-        /* Bilinear = linear in temperature per load column, then in load. */
-        for (int j = 0; j < m->eta_of_T_load.ny; ++j) {
-            gs_real column[GS_TABLE_MAX];
-            for (int i = 0; i < m->eta_of_T_load.nx; ++i) {
-                column[i] = m->eta_of_T_load.z[i][j];
-            }
-            ctx->eta_of_load[j] = gs_interp1(m->eta_of_T_load.x, column, m->eta_of_T_load.nx,
-                                             temperature);
+    case GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY: {
+        /* Bilinear = linear in temperature per load column, then in load. The
+         * temperature bracket and weight are found once for all columns. */
+        const gs_table2_ *t = &m->eta_of_T_load;
+        int lo = 0;
+        int hi = 0;
+        gs_real w = GS_R(0.0);
+        gs_interp_bracket(t->x, t->nx, temperature, &lo, &hi, &w);
+        for (int j = 0; j < t->ny; ++j) {
+            ctx->eta_of_load[j] =
+                lo == hi ? t->z[lo][j] : t->z[lo][j] + w * (t->z[hi][j] - t->z[lo][j]);
         }
         break;
+    }
     case GS_FRICTION_NONE:
     case GS_FRICTION_CONSTANT_EFFICIENCY:
     case GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY:
