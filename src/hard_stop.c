@@ -10,6 +10,14 @@
 #include "gs_math.h"
 
 #define NEWTON_ITERATIONS 12
+/* Newton also stops once its step is below this fraction of the bracket
+ * scale |u_free| + c*|f0|: deterministic, and the worst case stays at
+ * NEWTON_ITERATIONS evaluations. */
+#ifdef GS_SINGLE_PRECISION
+#define NEWTON_TOLERANCE GS_R(1e-6)
+#else
+#define NEWTON_TOLERANCE GS_R(1e-13)
+#endif
 
 /* Force and its derivative along u when x = x0 + h*u (dfdu = h*df/dx + df/dv). */
 static gs_real contact_force_d(const gs_mesh_ *m, gs_real x, gs_real u, gs_real h,
@@ -113,6 +121,7 @@ gs_real gs_contact_solve(gs_mesh_ *m, gs_real x, gs_real u_free, gs_real h, gs_r
          * u; its root lies between u_free and u_free - c*f0. */
         gs_real lo = f0 > GS_R(0.0) ? u_free - c * f0 : u_free;
         gs_real hi = f0 > GS_R(0.0) ? u_free : u_free - c * f0;
+        const gs_real tolerance = NEWTON_TOLERANCE * (gs_abs(u_free) + c * gs_abs(f0));
         gs_real f = f0;          /* f, dfdu and f_spring at u */
         int evaluated_at_u = 1;
         for (int i = 0; i < NEWTON_ITERATIONS; ++i) {
@@ -133,8 +142,10 @@ gs_real gs_contact_solve(gs_mesh_ *m, gs_real x, gs_real u_free, gs_real h, gs_r
              * the bracket shrinks every iteration. */
             const gs_real slope = GS_R(1.0) + c * dfdu;
             gs_real next = slope > GS_R(0.0) ? u - phi / slope : lo;
-            if (!(next < u) && !(next > u)) {
-                break; /* the Newton step is below the resolution of u */
+            if (gs_abs(next - u) <= tolerance && next >= lo && next <= hi) {
+                u = next; /* converged */
+                evaluated_at_u = 0;
+                break;
             }
             if (!(next > lo && next < hi)) {
                 next = GS_R(0.5) * (lo + hi);
