@@ -161,6 +161,20 @@ gs_real gs_contact_solve(gs_mesh_ *m, gs_real x, gs_real u_free, gs_real h, gs_r
             (void)contact_force_d(m, x + h * u, u, h, &dfdu, f_spring);
         }
         *force = (u_free - u) / c;
+        if ((*force - *f_spring) * u < GS_R(0.0) && gs_abs(x) <= m->half_gap) {
+            /* First contact: the root sits on a jump of the law (damping
+             * switched on at the stop's edge); the bracket holds it only to its
+             * final width, leaving a sliver of spring compression that the
+             * force does not match (and a negative damping power). The exact
+             * root is the stop's edge. */
+            const gs_real edge = x + h * u > GS_R(0.0) ? m->half_gap : -m->half_gap;
+            const gs_real u_edge = (edge - x) / h;
+            if (u_edge >= lo && u_edge <= hi) {
+                u = u_edge;
+                *force = (u_free - u) / c;
+                *f_spring = GS_R(0.0);
+            }
+        }
     }
     if (m->lock_enabled && gs_abs(x + h * u) >= m->half_gap && gs_abs(u) < m->lock_speed) {
         m->locked = 1;
