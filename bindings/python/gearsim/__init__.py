@@ -1,0 +1,55 @@
+"""gearsim: Simple Gear and Rack & Pinion for fixed-step simulation and HIL.
+
+Python bindings of the gearsim C core (cffi, API mode; the C sources are
+compiled into ``gearsim._gearsim``). The physics lives in C only; this package
+adds parameter handling (names, defaults, units, TOML model files), numpy batch
+runs and errors as exceptions. See docs/python.md and docs/python-api.md.
+
+    import gearsim
+    model = gearsim.Model.load("model.toml")
+    rig = model.rig(dt=1e-3)
+    out = rig.run(base_speed=w, load=tau_load)
+    out.base_torque, out.driven_speed, out.temperature
+"""
+
+from __future__ import annotations
+
+from ._lib import ffi as _ffi
+from ._lib import lib as _lib
+from .blocks import Block, RackPinion, SimpleGear, make_block
+from .errors import GearsimError, InputError, ModelFileError, ParameterError
+from .model import Model
+from .params import param_units
+from .rig import INPUT_NAMES, OUTPUT_NAMES, GearRig, RackRig, Rig, RigResult, RigSnapshot
+
+__version__: str = _ffi.string(_lib.GS_VERSION_STRING).decode()
+#: Version of the compiled C core (GS_VERSION_STRING).
+C_VERSION: str = __version__
+#: Capacity of every interpolation table (GS_TABLE_MAX of the compiled core).
+TABLE_MAX: int = int(_lib.GS_TABLE_MAX)
+#: Largest contact sub-step count (GS_MAX_SUBSTEPS).
+MAX_SUBSTEPS: int = int(_lib.GS_MAX_SUBSTEPS)
+
+__all__ = [
+    "Block",
+    "SimpleGear",
+    "RackPinion",
+    "make_block",
+    "Rig",
+    "GearRig",
+    "RackRig",
+    "RigResult",
+    "RigSnapshot",
+    "INPUT_NAMES",
+    "OUTPUT_NAMES",
+    "Model",
+    "param_units",
+    "GearsimError",
+    "ParameterError",
+    "ModelFileError",
+    "InputError",
+    "TABLE_MAX",
+    "MAX_SUBSTEPS",
+    "C_VERSION",
+    "__version__",
+]

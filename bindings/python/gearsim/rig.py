@@ -1,0 +1,558 @@
+"""Rigs: a block between a driven base shaft and the driven side (follower
+inertia or rack mass), the C ``gs_rig`` of include/gearsim/rig.h
+(docs/physics.md section 11).
+
+``Rig.step`` is the per-step call (HIL); ``Rig.run`` loops in C over numpy
+arrays (gs_rig_run) and is bit-identical to the same number of steps.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, fields
+from typing import Any, ClassVar
+
+import numpy as np
+
+from . import params as P
+from ._lib import INPUT_COLUMNS, OUTPUT_COLUMNS, check, ffi, lib
+from .blocks import Block, RackPinion, SimpleGear
+from .errors import GearsimError, InputError, ParameterError
+
+__all__ = ["Rig", "GearRig", "RackRig", "RigResult", "RigSnapshot", "INPUT_NAMES", "OUTPUT_NAMES"]
+
+# Python name -> C field of gs_rig_input / gs_rig_output.
+_INPUT_FIELDS = {
+    "base_speed": "base_speed_rad_s",
+    "base_torque": "base_torque_Nm",
+    "load": "load",
+    "ambient_temperature": "ambient_temperature_K",
+    "measured_temperature": "measured_temperature_K",
+}
+_OUTPUT_FIELDS = {
+    "base_torque": "base_torque_Nm",
+    "base_speed": "base_speed_rad_s",
+    "base_angle": "base_angle_rad",
+    "driven_speed": "driven_speed",
+    "driven_position": "driven_position",
+    "base_port_torque": "base_port_torque_Nm",
+    "driven_port_torque": "driven_port_torque",
+    "mesh_loss_power": "mesh_loss_power_W",
+    "loss_power": "loss_power_W",
+    "port_power": "port_power_W",
+    "contact_energy": "contact_energy_J",
+    "temperature": "temperature_K",
+    "backlash_position": "backlash_position_m",
+    "contact_force": "contact_force_N",
+    "driven_acceleration": "driven_acceleration",
+}
+_IN_COL = {name: INPUT_COLUMNS[c] for name, c in _INPUT_FIELDS.items()}
+_OUT_COL = {name: OUTPUT_COLUMNS[c] for name, c in _OUTPUT_FIELDS.items()}
+if sorted(_IN_COL.values()) != list(range(lib.GS_RIG_INPUT_FIELDS)) or sorted(
+    _OUT_COL.values()
+) != list(range(lib.GS_RIG_OUTPUT_FIELDS)):  # pragma: no cover
+    raise ImportError("gearsim: gs_rig_input / gs_rig_output do not match the bindings")
+
+#: Columns of the N x 5 input array of Rig.run_array, in order.
+INPUT_NAMES: tuple[str, ...] = tuple(sorted(_IN_COL, key=_IN_COL.__getitem__))
+#: Columns of the N x 15 output array of Rig.run_array, in order.
+OUTPUT_NAMES: tuple[str, ...] = tuple(sorted(_OUT_COL, key=_OUT_COL.__getitem__))
+
+
+@dataclass(frozen=True, eq=False)
+class RigResult:
+    """Outputs of Rig.run (float64 arrays, one value per sample) or Rig.step
+    (floats). Units: N*m, rad/s, rad on the base side; N*m, rad/s, rad (gear
+    rig) or N, m/s, m (rack rig) on the driven side; W, J, K, m, N otherwise.
+    Torques, powers and the contact force are means over the step's contact
+    sub-steps; speeds, angles, positions and temperature are end-of-step values.
+    """
+
+    base_torque: Any
+    """torque the drive applies to the base shaft (N*m)"""
+    base_speed: Any
+    """base (pinion) shaft speed (rad/s)"""
+    base_angle: Any
+    """base (pinion) shaft angle (rad)"""
+    driven_speed: Any
+    """follower speed (rad/s) or rack velocity (m/s)"""
+    driven_position: Any
+    """follower angle (rad) or rack position (m)"""
+    base_port_torque: Any
+    """tau_B, what the base shaft applies to the block (N*m)"""
+    driven_port_torque: Any
+    """tau_F (N*m) or F_R (N), what the driven side applies to the block"""
+    mesh_loss_power: Any
+    """meshing loss (W, >= 0)"""
+    loss_power: Any
+    """mesh + viscous + contact damping loss (W, >= 0)"""
+    port_power: Any
+    """power into the block through both ports (W)"""
+    contact_energy: Any
+    """energy in the backlash spring at the end of the step (J)"""
+    temperature: Any
+    """temperature the losses used (K)"""
+    backlash_position: Any
+    """backlash position x (m)"""
+    contact_force: Any
+    """backlash contact force (N)"""
+    driven_acceleration: Any
+    """follower (rad/s^2) or rack (m/s^2) acceleration"""
+
+    FIELDS: ClassVar[tuple[str, ...]] = OUTPUT_NAMES
+
+    @classmethod
+    def from_array(cls, out: np.ndarray) -> RigResult:
+        """Named column views of an N x 15 output array (Rig.run_array)."""
+        return cls(**{name: out[:, col] for name, col in _OUT_COL.items()})
+
+    def to_dict(self) -> dict[str, Any]:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    def as_array(self) -> np.ndarray:
+        """The outputs as an N x 15 array (columns in FIELDS order)."""
+        return np.column_stack([np.atleast_1d(getattr(self, n)) for n in OUTPUT_NAMES])
+
+    def __getitem__(self, name: str) -> Any:
+        if name not in _OUT_COL:
+            raise KeyError(name)
+        return getattr(self, name)
+
+    def keys(self) -> tuple[str, ...]:
+        return OUTPUT_NAMES
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(OUTPUT_NAMES)
+
+    def __len__(self) -> int:
+        first = self.base_torque
+        return int(np.size(first)) if isinstance(first, np.ndarray) else 1
+
+
+@dataclass(frozen=True)
+class RigSnapshot:
+    """The complete C state of a rig (the gs_rig struct bytes), for
+    Rig.restore. Picklable; only restorable into a rig with the same
+    parameters."""
+
+    block: str
+    state: bytes
+    key: Any
+
+
+class Rig:
+    """A block between a base shaft and the driven side (C gs_rig).
+
+    Args:
+        block: a SimpleGear or a RackPinion.
+        dt: fixed step (s).
+        temperature_input: when True, the losses use the measured_temperature
+            input instead of the thermal state.
+        **rig_params: follower_inertia (gear) or rack_mass (rack),
+            load_coulomb_friction, load_coulomb_speed_threshold, load_offset,
+            thermal_resistance (None = adiabatic), ambient_temperature,
+            base_inertia, initial_base_speed, accel_filter_time_constant,
+            contact_substeps, base_drive ("speed" or "torque"). SI numbers or
+            unit strings; missing ones take the defaults (Rig.defaults()).
+    """
+
+    def __init__(
+        self,
+        block: Block,
+        *,
+        dt: float | str = 1e-3,
+        temperature_input: bool = False,
+        **rig_params: Any,
+    ) -> None:
+        if not isinstance(block, Block):
+            raise TypeError(
+                f"block must be a SimpleGear or a RackPinion, got {type(block).__name__}"
+            )
+        kind = block.kind
+        rig_specs = {p.name: p for p in P.BLOCKS[kind][1]}
+        dt_value = P.normalize(P.Param("dt", P.REAL, "s"), dt)
+        given = P.normalize_all(rig_specs, rig_params, f"{kind} rig")
+        full = {**P.rig_defaults(kind), **given}
+        c_params = ffi.new("gs_rig_params *")
+        c_params[0] = lib.gs_rig_params_default()
+        P.write_struct(P.BLOCKS[kind][1], full, c_params)
+        c_params.dt_s = dt_value
+        c_params.heat_path = 0 if full["thermal_resistance"] is None else 1
+        c_params.temperature_source = (
+            lib.GS_TEMPERATURE_FROM_INPUT if temperature_input else lib.GS_TEMPERATURE_FROM_MODEL
+        )
+        rig = ffi.new("gs_rig *")
+        err = ffi.new("gs_error *")
+        if kind == "simple_gear":
+            status = lib.gs_rig_init_gear(rig, block._c_params, c_params, err)
+        else:
+            status = lib.gs_rig_init_rack(rig, block._c_params, c_params, err)
+        values = {**block.params, **full, "dt": dt_value}
+        check(status, err, rename=_c_rig_names(kind), value_of=values.__getitem__)
+        ambient = full["ambient_temperature"]
+        if not (math.isfinite(ambient) and ambient > 0):
+            raise ParameterError(
+                f"must be a finite temperature > 0 K, got {ambient!r}",
+                parameter="ambient_temperature",
+                status="GS_E_NOT_POSITIVE",
+            )
+        self._block = block
+        self._kind = kind
+        self._dt = dt_value
+        self._temperature_input = bool(temperature_input)
+        self._given = given
+        self._full = full
+        self._rig = rig
+        self._in = ffi.new("gs_rig_input *")
+        self._out = ffi.new("gs_rig_output *")
+        self._out_view = np.frombuffer(ffi.buffer(self._out), dtype=np.float64)
+        self._ambient = float(full["ambient_temperature"])
+        self._speed_driven = full["base_drive"] == "speed"
+        self._key = (
+            kind,
+            P.canonical(block.params),
+            P.canonical(full),
+            P.canonical(dt_value),
+            self._temperature_input,
+        )
+        self.model: Any = None  # set by Model.rig()
+
+    # -- description ---------------------------------------------------------
+    @classmethod
+    def defaults(cls, block: str = "simple_gear") -> dict[str, Any]:
+        """Default rig parameters for a block ("simple_gear" or "rack_pinion")."""
+        return P.rig_defaults(block)
+
+    @property
+    def kind(self) -> str:
+        """ "simple_gear" or "rack_pinion"."""
+        return self._kind
+
+    @property
+    def block(self) -> Block:
+        """The SimpleGear or RackPinion inside."""
+        return self._block
+
+    @property
+    def dt(self) -> float:
+        """Fixed step (s)."""
+        return self._dt
+
+    @property
+    def temperature_input(self) -> bool:
+        return self._temperature_input
+
+    @property
+    def base_drive(self) -> str:
+        """ "speed" or "torque"."""
+        return str(self._full["base_drive"])
+
+    @property
+    def ambient_temperature(self) -> float:
+        """Ambient temperature used when run/step get none (K)."""
+        return float(self._full["ambient_temperature"])
+
+    @property
+    def params(self) -> dict[str, Any]:
+        """Every rig parameter in use (given or default), SI units."""
+        return dict(self._full)
+
+    @property
+    def given_params(self) -> dict[str, Any]:
+        return dict(self._given)
+
+    @property
+    def substeps(self) -> int:
+        """Contact sub-steps per step chosen by the C rig (backlash)."""
+        return int(self._rig.substeps)
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{k}={v!r}" for k, v in self._given.items())
+        sep = ", " if args else ""
+        return (
+            f"{type(self).__name__}({self._block!r}, dt={self._dt!r}, "
+            f"temperature_input={self._temperature_input!r}{sep}{args})"
+        )
+
+    # -- state -----------------------------------------------------------------
+    def reset(self) -> None:
+        """Back to the initial state (speeds, angles, temperature, backlash)."""
+        lib.gs_rig_reset(self._rig)
+
+    def snapshot(self) -> RigSnapshot:
+        """The complete state; restore() continues bit-identically."""
+        return RigSnapshot(self._kind, bytes(ffi.buffer(self._rig)), self._key)
+
+    def restore(self, snapshot: RigSnapshot) -> None:
+        """Restore a snapshot() taken from this rig or one with the same parameters."""
+        if not isinstance(snapshot, RigSnapshot):
+            raise TypeError(f"expected a RigSnapshot, got {type(snapshot).__name__}")
+        if snapshot.key != self._key or len(snapshot.state) != ffi.sizeof("gs_rig"):
+            raise GearsimError("snapshot was taken from a rig with other parameters")
+        ffi.memmove(self._rig, snapshot.state, len(snapshot.state))
+
+    def copy(self) -> Rig:
+        """An independent rig with the same parameters and state."""
+        new = self.__class__.__new__(self.__class__)
+        new.__dict__.update(self.__dict__)
+        new._rig = ffi.new("gs_rig *")
+        ffi.memmove(new._rig, self._rig, ffi.sizeof("gs_rig"))
+        new._in = ffi.new("gs_rig_input *")
+        new._out = ffi.new("gs_rig_output *")
+        new._out_view = np.frombuffer(ffi.buffer(new._out), dtype=np.float64)
+        return new
+
+    # -- stepping --------------------------------------------------------------
+    def step(
+        self,
+        *,
+        base_speed: float | None = None,
+        base_torque: float | None = None,
+        load: float = 0.0,
+        ambient_temperature: float | None = None,
+        measured_temperature: float | None = None,
+    ) -> RigResult:
+        """One step of dt (gs_rig_step). Returns a RigResult of floats.
+
+        base_speed (rad/s) is required for a speed-driven rig, base_torque (N*m)
+        for a torque-driven one; load (N*m or N) defaults to 0,
+        ambient_temperature (K) to the rig's, measured_temperature (K) is
+        required when the rig was built with temperature_input=True.
+        """
+        c_in = self._in
+        if self._speed_driven:
+            if base_speed is None:
+                raise InputError("required by a speed-driven rig", parameter="base_speed")
+            c_in.base_speed_rad_s = _finite("base_speed", base_speed)
+            c_in.base_torque_Nm = (
+                0.0 if base_torque is None else _finite("base_torque", base_torque)
+            )
+        else:
+            if base_torque is None:
+                raise InputError("required by a torque-driven rig", parameter="base_torque")
+            c_in.base_torque_Nm = _finite("base_torque", base_torque)
+            c_in.base_speed_rad_s = 0.0 if base_speed is None else _finite("base_speed", base_speed)
+        c_in.load = _finite("load", load)
+        ambient = (
+            self._ambient
+            if ambient_temperature is None
+            else _finite("ambient_temperature", ambient_temperature)
+        )
+        c_in.ambient_temperature_K = ambient
+        if measured_temperature is None:
+            if self._temperature_input:
+                raise InputError(
+                    "required by a rig built with temperature_input=True",
+                    parameter="measured_temperature",
+                )
+            c_in.measured_temperature_K = ambient
+        else:
+            c_in.measured_temperature_K = _finite("measured_temperature", measured_temperature)
+        lib.gs_rig_step(self._rig, c_in, self._out)
+        values = self._out_view.tolist()  # in column order, i.e. OUTPUT_NAMES order
+        result = _new_result(RigResult)
+        result.__dict__.update(zip(OUTPUT_NAMES, values, strict=True))
+        return result
+
+    def inputs(
+        self,
+        *,
+        base_speed: Any = None,
+        base_torque: Any = None,
+        load: Any = None,
+        ambient_temperature: Any = None,
+        measured_temperature: Any = None,
+        n: int | None = None,
+    ) -> np.ndarray:
+        """The N x 5 input array of run_array() from named inputs (arrays of
+        equal length, or scalars broadcast; n gives the length when all are
+        scalars). Checks as in step()."""
+        given = {
+            "base_speed": base_speed,
+            "base_torque": base_torque,
+            "load": load,
+            "ambient_temperature": ambient_temperature,
+            "measured_temperature": measured_temperature,
+        }
+        driving = "base_speed" if self._speed_driven else "base_torque"
+        if given[driving] is None:
+            raise InputError(f"required by a {self.base_drive}-driven rig", parameter=driving)
+        if self._temperature_input and measured_temperature is None:
+            raise InputError(
+                "required by a rig built with temperature_input=True",
+                parameter="measured_temperature",
+            )
+        arrays: dict[str, np.ndarray] = {}
+        length = n
+        for name, value in given.items():
+            if value is None:
+                continue
+            arr = np.asarray(value, dtype=np.float64)
+            if arr.ndim > 1:
+                raise InputError(f"must be one-dimensional, got shape {arr.shape}", parameter=name)
+            if arr.ndim == 1:
+                if length is None:
+                    length = arr.shape[0]
+                elif arr.shape[0] != length:
+                    raise InputError(
+                        f"has {arr.shape[0]} samples, expected {length}", parameter=name
+                    )
+            arrays[name] = arr
+        if length is None:
+            raise InputError("all inputs are scalars; give n (the number of steps)", parameter="n")
+        if length < 0:
+            raise InputError(f"must be >= 0, got {length}", parameter="n")
+        out = np.zeros((length, lib.GS_RIG_INPUT_FIELDS), dtype=np.float64)
+        for name, arr in arrays.items():
+            out[:, _IN_COL[name]] = arr
+        if ambient_temperature is None:
+            out[:, _IN_COL["ambient_temperature"]] = self.ambient_temperature
+        if measured_temperature is None:
+            out[:, _IN_COL["measured_temperature"]] = out[:, _IN_COL["ambient_temperature"]]
+        return out
+
+    def run(
+        self,
+        *,
+        base_speed: Any = None,
+        base_torque: Any = None,
+        load: Any = None,
+        ambient_temperature: Any = None,
+        measured_temperature: Any = None,
+        n: int | None = None,
+    ) -> RigResult:
+        """Run len(inputs) steps in C (gs_rig_run), continuing from the current
+        state. Inputs as in step(), as arrays of equal length or scalars
+        broadcast. Returns a RigResult of float64 arrays."""
+        inputs = self.inputs(
+            base_speed=base_speed,
+            base_torque=base_torque,
+            load=load,
+            ambient_temperature=ambient_temperature,
+            measured_temperature=measured_temperature,
+            n=n,
+        )
+        return RigResult.from_array(self.run_array(inputs))
+
+    def run_array(self, inputs: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """Low-level batch run: inputs is N x 5 (columns INPUT_NAMES, the fields
+        of gs_rig_input), the result N x 15 (columns OUTPUT_NAMES). out, if
+        given, must be a C-contiguous, writable float64 N x 15 array."""
+        arr = np.ascontiguousarray(inputs, dtype=np.float64)
+        n_in = lib.GS_RIG_INPUT_FIELDS
+        if arr.ndim != 2 or arr.shape[1] != n_in:
+            raise InputError(
+                f"inputs must be N x {n_in}, got shape {arr.shape}", parameter="inputs"
+            )
+        n = arr.shape[0]
+        bad = ~np.isfinite(arr)
+        if bad.any():
+            row, col = (int(i) for i in np.argwhere(bad)[0])
+            raise InputError(
+                f"non-finite value {arr[row, col]!r} at sample {row}", parameter=INPUT_NAMES[col]
+            )
+        shape = (n, lib.GS_RIG_OUTPUT_FIELDS)
+        if out is None:
+            out = np.empty(shape, dtype=np.float64)
+        elif (
+            out.shape != shape
+            or out.dtype != np.float64
+            or not out.flags.c_contiguous
+            or not out.flags.writeable
+        ):
+            raise InputError(
+                f"out must be a C-contiguous writable float64 array of shape {shape}",
+                parameter="out",
+            )
+        if n:
+            c_in = ffi.cast("gs_rig_input *", ffi.from_buffer(arr))
+            c_out = ffi.cast("gs_rig_output *", ffi.from_buffer(out, require_writable=True))
+            lib.gs_rig_run(self._rig, n, c_in, c_out)
+        return out
+
+
+_new_result = object.__new__  # fast construction of a frozen RigResult in step()
+
+
+def _finite(name: str, value: Any) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"must be a number, got {value!r}", parameter=name) from None
+    if not math.isfinite(x):
+        raise InputError(f"must be finite, got {value!r}", parameter=name)
+    return x
+
+
+def _c_rig_names(kind: str) -> dict[str, str]:
+    """C parameter names reported by gs_rig_init_* -> Python names, where they differ."""
+    driven = "follower_inertia" if kind == "simple_gear" else "rack_mass"
+    return {
+        "driven_inertia": driven,
+        "dt_s": "dt",
+        "base_inertia_kg_m2": "base_inertia",
+        "thermal_resistance_K_W": "thermal_resistance",
+        "accel_filter_time_constant_s": "accel_filter_time_constant",
+        "initial_base_speed_rad_s": "initial_base_speed",
+    }
+
+
+def _split(
+    block_cls: type[Block], block: Any, params: dict[str, Any]
+) -> tuple[Block, dict[str, Any]]:
+    """Block object and rig parameters from GearRig/RackRig arguments: keyword
+    parameters that are block parameters go to the block."""
+    block_keys = {k: v for k, v in params.items() if k in block_cls.parameter_names()}
+    rig_params = {k: v for k, v in params.items() if k not in block_keys}
+    if isinstance(block, block_cls):
+        if block_keys:
+            return block.replace(**block_keys), rig_params
+        return block, rig_params
+    if isinstance(block, Block):
+        raise TypeError(f"{block_cls.__name__} expected, got {type(block).__name__}")
+    return block_cls(**{**dict(block or {}), **block_keys}), rig_params
+
+
+class GearRig(Rig):
+    """Simple Gear rig: a SimpleGear between the speed- or torque-driven base
+    shaft and the follower inertia.
+
+    gear is a SimpleGear, a mapping of its parameters, or None; keyword
+    parameters that are Simple Gear parameters (teeth_ratio, friction_model,
+    ...) go to the gear, the others are rig parameters (see Rig):
+    ``GearRig(teeth_ratio=3, follower_inertia=0.02, dt=1e-3)``.
+    """
+
+    def __init__(
+        self,
+        gear: SimpleGear | Mapping[str, Any] | None = None,
+        *,
+        dt: float | str = 1e-3,
+        temperature_input: bool = False,
+        **params: Any,
+    ) -> None:
+        block, rig_params = _split(SimpleGear, gear, params)
+        super().__init__(block, dt=dt, temperature_input=temperature_input, **rig_params)
+
+
+class RackRig(Rig):
+    """Rack & Pinion rig: a RackPinion between the speed- or torque-driven pinion
+    shaft and the rack mass.
+
+    rack is a RackPinion, a mapping of its parameters, or None; keyword
+    parameters that are Rack & Pinion parameters (pinion_radius, ...) go to the
+    block, the others are rig parameters (see Rig):
+    ``RackRig(pinion_radius="20 mm", rack_mass=2.0)``.
+    """
+
+    def __init__(
+        self,
+        rack: RackPinion | Mapping[str, Any] | None = None,
+        *,
+        dt: float | str = 1e-3,
+        temperature_input: bool = False,
+        **params: Any,
+    ) -> None:
+        block, rig_params = _split(RackPinion, rack, params)
+        super().__init__(block, dt=dt, temperature_input=temperature_input, **rig_params)
