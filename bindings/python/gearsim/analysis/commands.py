@@ -1,0 +1,413 @@
+"""The analysis subcommands of ``gearsim``: compare, diagnose, fit, report.
+
+A thin shell over gearsim.analysis: parse arguments, load and check the model
+and the measurement (all input is checked before anything is written), call
+the function, print a table or exactly one JSON object on stdout. Progress
+goes to stderr (silence it with --quiet), never into the JSON.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+from typing import Any
+
+__all__ = ["register"]
+
+
+# ---------------------------------------------------------------- shared
+
+
+def _common(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "data", metavar="DATA.csv", help="measurement CSV (docs/measurement-contract.md section 1)"
+    )
+    p.add_argument(
+        "--model", required=True, metavar="MODEL.toml", help="model file (contract section 2)"
+    )
+    p.add_argument("--json", action="store_true", help="print exactly one JSON object on stdout")
+    p.add_argument(
+        "--column",
+        action="append",
+        metavar="CANONICAL=SOURCE[*FACTOR]",
+        default=[],
+        help="read a canonical column from another header name, optionally scaled into SI "
+        "(repeatable), e.g. --column pinion_speed=omega_rpm*0.104719755",
+    )
+    p.add_argument(
+        "--resample",
+        action="store_true",
+        help="interpolate non-uniformly sampled data onto a uniform grid instead of refusing it",
+    )
+    p.add_argument(
+        "--input-filter",
+        default="auto",
+        metavar="auto|none|HZ",
+        help="zero-phase low-pass on the measured inputs before they drive the rig: 'auto' "
+        "(cut-off from each input's spectrum, default), 'none', or a cut-off in Hz",
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
+
+
+def _progress(args: argparse.Namespace):
+    if getattr(args, "quiet", False):
+        return lambda msg: None
+    t0 = time.perf_counter()
+
+    def say(msg: str) -> None:
+        sys.stderr.write(f"[{time.perf_counter() - t0:6.2f} s] {msg}\n")
+        sys.stderr.flush()
+
+    return say
+
+
+def _input_filter(value: str):
+    from .errors import MeasurementError
+
+    v = str(value).strip().lower()
+    if v == "auto":
+        return "auto"
+    if v in ("none", "off", "0"):
+        return None
+    try:
+        hz = float(v)
+    except ValueError:
+        raise MeasurementError(
+            f"--input-filter must be auto, none or a frequency in Hz, got '{value}'"
+        ) from None
+    if not (hz > 0 and math.isfinite(hz)):
+        raise MeasurementError(f"--input-filter must be a positive frequency in Hz, got '{value}'")
+    return hz
+
+
+def _load(args: argparse.Namespace):
+    """Model and measurement, both checked (exit 2 on any problem)."""
+    from .. import Model
+    from ..errors import ModelFileError
+    from .measurement import load_measurement, parse_column_map
+
+    if not os.path.exists(args.model):
+        raise ModelFileError("no such file", file=args.model)
+    model = Model.load(args.model)
+    meas = load_measurement(
+        args.data, model.block, columns=parse_column_map(args.column), resample=args.resample
+    )
+    return model, meas
+
+
+def _clean(obj: Any) -> Any:
+    """JSON-safe: numpy scalars to float, non-finite floats to None."""
+    import numpy as np
+
+    if isinstance(obj, dict):
+        return {str(k): _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _clean(obj.tolist())
+    if isinstance(obj, (np.floating, float)):
+        f = float(obj)
+        return f if math.isfinite(f) else None
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+def _emit_json(obj: dict) -> None:
+    sys.stdout.write(json.dumps(_clean(obj), allow_nan=False) + "\n")
+    sys.stdout.flush()
+
+
+def _write_model_atomic(model: Any, path: str) -> None:
+    d = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(d):
+        from ..errors import ModelFileError
+
+        raise ModelFileError("the directory for --out does not exist", file=path)
+    tmp = os.path.join(d, f".{os.path.basename(path)}.tmp{os.getpid()}")
+    try:
+        model.save(tmp)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+
+
+def _g(x: Any) -> str:
+    try:
+        return f"{float(x):.4g}"
+    except (TypeError, ValueError):
+        return str(x)
+
+
+# ---------------------------------------------------------------- compare
+
+
+def _compare_args(p: argparse.ArgumentParser) -> None:
+    _common(p)
+
+
+def _print_compare(res) -> None:
+    meas = res.meas
+    print(f"{meas.path}: {meas.n} samples, dt = {meas.dt:.6g} s; model block {meas.block}")
+    print(
+        f"{'output':16s} {'nrmse':>8s} {'fit %':>7s} {'rmse':>10s} "
+        f"{'max |err|':>10s} {'at t (s)':>9s}"
+    )
+    for name, m in res.outputs.items():
+        print(
+            f"{name:16s} {m.nrmse:8.4f} {m.fit_percent:7.2f} {m.rmse:10.4g} "
+            f"{m.max_abs:10.4g} {m.t_max_abs:9.4g}"
+        )
+    print(f"{'overall':16s} {res.nrmse:8.4f} {100 * (1 - res.nrmse):7.2f}")
+    _print_regimes(res)
+
+
+def _print_regimes(res) -> None:
+    if not res.regimes:
+        return
+    outs = list(res.outputs)
+    print(
+        "\nerror by regime (rms residual in the regime / std of the output; x = ratio to overall):"
+    )
+    print(f"{'regime':20s} {'share':>6s} " + " ".join(f"{o:>22s}" for o in outs))
+    for r in res.regimes:
+        cells = []
+        for o in outs:
+            e = r["outputs"][o]
+            cells.append(f"{_g(e['nrmse']):>10s} ({_g(e['ratio']):>5s}x)   ")
+        flag = "  <- fails" if r["failing"] else ""
+        print(f"{r['regime']:20s} {100 * r['fraction']:5.1f}% " + " ".join(cells) + flag)
+
+
+def _compare(args: argparse.Namespace) -> int:
+    from .compare import compare
+
+    say = _progress(args)
+    filt = _input_filter(args.input_filter)
+    model, meas = _load(args)
+    say(f"compare: {meas.n} samples")
+    res = compare(model, meas, input_filter=filt)
+    if args.json:
+        _emit_json(res.to_json())
+    else:
+        _print_compare(res)
+    return 0
+
+
+# ---------------------------------------------------------------- diagnose
+
+
+def _diagnose_args(p: argparse.ArgumentParser) -> None:
+    _common(p)
+    p.add_argument(
+        "--top",
+        type=int,
+        default=3,
+        metavar="N",
+        help="fit the N best screened candidates on the simulation (default 3)",
+    )
+    p.add_argument(
+        "--no-fit", action="store_true", help="screening only (fast; errors after are estimates)"
+    )
+
+
+def _print_diagnose(res) -> None:
+    print(
+        f"baseline nrmse {res.baseline_nrmse:.4f} "
+        f"(re-estimating the present parameters alone: {res.reestimate_nrmse:.4f})"
+    )
+    fails = res.baseline.failing_regimes
+    if fails:
+        print(
+            "failing regimes: "
+            + ", ".join(f"{r['regime']} ({r['worst_ratio']:.1f}x)" for r in fails)
+        )
+    else:
+        print("failing regimes: none stands out")
+    print(f"\n{'rank':4s} {'effect':34s} {'nrmse after':>11s} {'how':>9s}  parameters")
+    for i, c in enumerate(res.candidates, 1):
+        params = ", ".join(
+            f"{k}={_g(v) if not isinstance(v, list) else '[' + ', '.join(_g(x) for x in v) + ']'}"
+            for k, v in c.parameters.items()
+        )
+        print(f"{i:4d} {c.effect:34s} {c.nrmse_after:11.4f} {c.method:>9s}  {params}")
+        if c.evidence.get("text"):
+            print(f"{'':5s}evidence: {c.evidence['text']}")
+    if res.skipped:
+        print("\nnot candidates: " + "; ".join(f"{k} ({v})" for k, v in res.skipped.items()))
+
+
+def _diagnose(args: argparse.Namespace) -> int:
+    from .diagnose import diagnose
+
+    say = _progress(args)
+    filt = _input_filter(args.input_filter)
+    model, meas = _load(args)
+    res = diagnose(
+        model, meas, input_filter=filt, top=max(1, args.top), fit=not args.no_fit, progress=say
+    )
+    if args.json:
+        _emit_json(res.to_json())
+    else:
+        _print_diagnose(res)
+    return 0
+
+
+# ---------------------------------------------------------------- fit
+
+
+def _fit_args(p: argparse.ArgumentParser) -> None:
+    _common(p)
+    p.add_argument(
+        "--add",
+        required=True,
+        metavar="EFFECT",
+        help="effect to add: meshing_efficiency, load_dependent_efficiency, "
+        "temperature_dependent_efficiency, viscous_friction, backlash, coulomb_friction, "
+        "load_offset",
+    )
+    p.add_argument(
+        "--out", metavar="NEW.toml", help="write the model with the effect added and fitted"
+    )
+    p.add_argument(
+        "--max-samples",
+        type=int,
+        metavar="N",
+        help="fit on the first N samples only (errors are still reported on all)",
+    )
+
+
+def _print_fit(res) -> None:
+    print(
+        f"effect {res.effect}: nrmse {res.nrmse_before:.4f} -> {res.nrmse_after:.4f} "
+        f"({res.evaluations} simulations, {res.seconds:.1f} s, {res.fit_samples} samples)"
+    )
+    print(f"{'parameter':28s} {'value':>12s} {'std':>10s} {'before':>12s}  role")
+    for f in res.fitted:
+        before = "" if f["before"] is None else _g(f["before"])
+        print(
+            f"{f['name']:28s} {_g(f['value']):>12s} {_g(f['std']):>10s} {before:>12s}  {f['role']}"
+        )
+    for name, m in res.outputs_after.items():
+        print(f"  {name}: nrmse {res.outputs_before[name].nrmse:.4f} -> {m.nrmse:.4f}")
+    for w in res.warnings:
+        print(f"warning: {w}")
+    for n in res.notes:
+        print(f"note: {n}")
+
+
+def _fit(args: argparse.Namespace) -> int:
+    from . import fit
+    from .effects import get_effect
+
+    say = _progress(args)
+    filt = _input_filter(args.input_filter)
+    model, meas = _load(args)
+    get_effect(args.add, model)  # unknown / inapplicable effect: exit 2 before any work
+    if args.out and not os.path.isdir(os.path.dirname(os.path.abspath(args.out))):
+        from ..errors import ModelFileError
+
+        raise ModelFileError("the directory for --out does not exist", file=args.out)
+    res = fit(model, meas, args.add, input_filter=filt, max_samples=args.max_samples, progress=say)
+    if args.out:
+        _write_model_atomic(res.model, args.out)
+        say(f"wrote {args.out}")
+    if args.json:
+        out = res.to_json()
+        if args.out:
+            out["out"] = args.out
+        _emit_json(out)
+    else:
+        _print_fit(res)
+    return 0
+
+
+# ---------------------------------------------------------------- report
+
+
+def _report_args(p: argparse.ArgumentParser) -> None:
+    _common(p)
+    p.add_argument(
+        "--out", required=True, metavar="DIR", help="directory for report.html and the PNG files"
+    )
+    p.add_argument(
+        "--rounds",
+        type=int,
+        default=0,
+        metavar="N",
+        help="rounds of diagnose -> fit the best effect before drawing (default 0: the "
+        "model as is)",
+    )
+    p.add_argument("--title", default=None, help="title of the HTML page")
+    p.add_argument(
+        "--save-models", action="store_true", help="also write model-round-K.toml for each round"
+    )
+
+
+def _report(args: argparse.Namespace) -> int:
+    from .report import run_rounds, write_report
+
+    say = _progress(args)
+    filt = _input_filter(args.input_filter)
+    model, meas = _load(args)
+    rounds = run_rounds(model, meas, rounds=max(0, args.rounds), input_filter=filt, progress=say)
+    paths = write_report(
+        args.out,
+        meas,
+        rounds,
+        title=args.title or f"gearsim report: {os.path.basename(args.data)}",
+        progress=say,
+    )
+    if args.save_models:
+        for i, r in enumerate(rounds):
+            _write_model_atomic(r.model, os.path.join(args.out, f"model-round-{i}.toml"))
+    summary = {
+        "report": paths["html"],
+        "images": paths["images"],
+        "rounds": [
+            {"round": i, "effect": r.effect, "nrmse": r.compare.nrmse} for i, r in enumerate(rounds)
+        ],
+    }
+    if args.json:
+        _emit_json(summary)
+    else:
+        for s in summary["rounds"]:
+            print(
+                f"round {s['round']}: {s['effect'] or 'model as given':34s} nrmse {s['nrmse']:.4f}"
+            )
+        print(f"wrote {paths['html']}")
+    return 0
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    from ..cli import add_command
+
+    add_command(
+        subparsers,
+        "compare",
+        "simulate a model on a measurement and report its error",
+        _compare_args,
+        _compare,
+    )
+    add_command(
+        subparsers,
+        "diagnose",
+        "rank the physical effects the model lacks, with evidence",
+        _diagnose_args,
+        _diagnose,
+    )
+    add_command(subparsers, "fit", "add one effect to the model and fit it", _fit_args, _fit)
+    add_command(
+        subparsers,
+        "report",
+        "draw compare / diagnose / fit rounds into PNG files and one HTML page",
+        _report_args,
+        _report,
+    )

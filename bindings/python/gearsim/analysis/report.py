@@ -1,0 +1,493 @@
+"""report: rounds of compare -> diagnose -> fit, drawn into PNG files and one
+self-contained HTML page (images embedded as base64; matplotlib, Agg backend).
+
+Figures:
+- ``overlay.png``: measured vs simulated, per output, first and last round;
+- ``residual.png``: the residual over time, per output, with the failing
+  regimes of the first round shaded;
+- ``residual_vs.png``: the drive-torque residual against speed and against
+  load, first and last round (the signature plots a person checks);
+- ``regimes.png``: error ratio per regime, first and last round;
+- ``error_fall.png``: nrmse after each round of adding an effect.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .compare import CompareResult, compare
+from .diagnose import DiagnoseResult, diagnose
+from .fitting import FitResult, fit_effect
+from .measurement import Measurement
+from .signatures import build_context
+from .simulate import prepare_inputs
+
+__all__ = ["Round", "run_rounds", "write_report", "FIGURES"]
+
+FIGURES = ("overlay", "residual", "residual_vs", "regimes", "error_fall")
+MAX_POINTS = 20_000
+
+
+@dataclass
+class Round:
+    """One round: the model, the effect added to reach it (None for the
+    starting model), its comparison, the diagnosis that chose the effect and
+    the fit."""
+
+    model: Any
+    effect: str | None
+    compare: CompareResult
+    diagnosis: DiagnoseResult | None = None
+    fit: FitResult | None = None
+
+
+def run_rounds(
+    model: Any,
+    meas: Measurement,
+    rounds: int = 3,
+    *,
+    input_filter: Any = "auto",
+    min_gain: float = 0.1,
+    progress: Callable[[str], None] | None = None,
+) -> list[Round]:
+    """Start from model; each round diagnoses, adds the best candidate (full
+    fit) and compares again. Stops early when no candidate lowers the nrmse by
+    at least min_gain (relative). The last round's diagnosis (if any) is kept
+    on it."""
+    say = progress or (lambda s: None)
+    inputs = prepare_inputs(meas, input_filter)
+    cur = compare(model, meas, inputs)
+    out = [Round(model, None, cur)]
+    say(f"round 0: nrmse {cur.nrmse:.4f}")
+    for k in range(1, rounds + 1):
+        d = diagnose(out[-1].model, meas, inputs, progress=say)
+        out[-1].diagnosis = d
+        best = d.best
+        if best is None or best.nrmse_after > (1.0 - min_gain) * cur.nrmse:
+            say(f"round {k}: no candidate lowers the nrmse by {100 * min_gain:.0f} % - stopping")
+            break
+        say(f"round {k}: adding {best.effect}")
+        if best.fit is not None and best.effect != "backlash":
+            fr = (
+                best.fit
+            )  # diagnose fitted it in full already (quick fits differ for backlash only)
+        else:
+            ctx = build_context(out[-1].model, meas, inputs, cur.sim, cur.regime_masks)
+            fr = fit_effect(ctx, best.effect, progress=say)
+        cur = compare(fr.model, meas, inputs)
+        out.append(Round(fr.model, best.effect, cur, None, fr))
+        say(f"round {k}: {best.effect}: nrmse {fr.nrmse_before:.4f} -> {cur.nrmse:.4f}")
+    return out
+
+
+# ---------------------------------------------------------------- drawing
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _stride(n: int) -> int:
+    return max(1, int(np.ceil(n / MAX_POINTS)))
+
+
+def _spans(mask: np.ndarray) -> list[tuple[int, int]]:
+    if not mask.any():
+        return []
+    d = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    starts = np.nonzero(d == 1)[0]
+    ends = np.nonzero(d == -1)[0]
+    return list(zip(starts, ends, strict=True))
+
+
+_COLORS = ["#d62728", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#bcbd22", "#17becf"]
+
+
+def _fig_overlay(plt, meas: Measurement, rounds: list[Round]):
+    outs = meas.spec.outputs
+    fig, axes = plt.subplots(
+        len(outs), 1, figsize=(11, 3.2 * len(outs)), sharex=True, squeeze=False
+    )
+    s = _stride(meas.n)
+    t = meas.time[::s]
+    for ax, o in zip(axes[:, 0], outs, strict=True):
+        ax.plot(t, meas[o][::s], color="0.55", lw=0.8, label="measured")
+        first = rounds[0].compare.sim.outputs[o][::s]
+        ax.plot(
+            t,
+            first,
+            color="#1f77b4",
+            lw=0.9,
+            ls="--" if len(rounds) > 1 else "-",
+            label="simulated, starting model",
+        )
+        if len(rounds) > 1:
+            ax.plot(
+                t,
+                rounds[-1].compare.sim.outputs[o][::s],
+                color="#2ca02c",
+                lw=0.9,
+                label=f"simulated, after round {len(rounds) - 1}",
+            )
+        ax.set_ylabel(f"{o} [{meas.spec.unit(o)}]")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.suptitle("measured vs simulated (open loop)")
+    fig.tight_layout()
+    return fig
+
+
+def _fig_residual(plt, meas: Measurement, rounds: list[Round]):
+    outs = meas.spec.outputs
+    fig, axes = plt.subplots(
+        len(outs), 1, figsize=(11, 3.2 * len(outs)), sharex=True, squeeze=False
+    )
+    s = _stride(meas.n)
+    t = meas.time[::s]
+    base = rounds[0].compare
+    failing = [r["regime"] for r in base.failing_regimes]
+    masks = {r.name: r.mask for r in base.regime_masks}
+    for ax, o in zip(axes[:, 0], outs, strict=True):
+        for i, name in enumerate(failing[:4]):
+            for a, b in _spans(masks[name]):
+                ax.axvspan(
+                    meas.time[a],
+                    meas.time[min(b, meas.n - 1)],
+                    color=_COLORS[i % len(_COLORS)],
+                    alpha=0.18,
+                    lw=0,
+                    label=name if (a, b) == _spans(masks[name])[0] else None,
+                )
+        ax.plot(
+            t, (meas[o] - base.sim.outputs[o])[::s], color="#1f77b4", lw=0.6, label="starting model"
+        )
+        if len(rounds) > 1:
+            last = rounds[-1].compare
+            ax.plot(
+                t,
+                (meas[o] - last.sim.outputs[o])[::s],
+                color="#2ca02c",
+                lw=0.6,
+                label=f"after round {len(rounds) - 1}",
+            )
+        ax.axhline(0, color="k", lw=0.5)
+        ax.set_ylabel(f"residual {o} [{meas.spec.unit(o)}]")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[-1, 0].set_xlabel("time [s]")
+    title = "residual (measured - simulated)"
+    if failing:
+        title += "; shaded: failing regimes of the starting model"
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def _fig_residual_vs(plt, meas: Measurement, rounds: list[Round]):
+    spec = meas.spec
+    o = spec.torque_output
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), squeeze=False)
+    s = _stride(meas.n)
+    x_speed = rounds[0].compare.inputs.base_speed[::s]
+    x_load = meas[spec.torque_output][::s]
+    for ax, x, label in (
+        (axes[0, 0], x_speed, f"{spec.speed_input} [{spec.speed_unit}]"),
+        (axes[0, 1], x_load, f"measured {spec.torque_output} [{spec.torque_unit}]"),
+    ):
+        r0 = (meas[o] - rounds[0].compare.sim.outputs[o])[::s]
+        ax.scatter(x, r0, s=2, alpha=0.35, color="#1f77b4", label="starting model", rasterized=True)
+        if len(rounds) > 1:
+            r1 = (meas[o] - rounds[-1].compare.sim.outputs[o])[::s]
+            ax.scatter(
+                x,
+                r1,
+                s=2,
+                alpha=0.35,
+                color="#2ca02c",
+                label=f"after round {len(rounds) - 1}",
+                rasterized=True,
+            )
+        ax.axhline(0, color="k", lw=0.5)
+        ax.set_xlabel(label)
+        ax.set_ylabel(f"residual {o} [{spec.torque_unit}]")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper left", fontsize=8, markerscale=4)
+    fig.suptitle(
+        "residual signatures: a step at zero speed = Coulomb, a slope with speed = viscous, "
+        "a fan with torque = efficiency",
+        fontsize=9,
+    )
+    fig.tight_layout()
+    return fig
+
+
+def _fig_regimes(plt, meas: Measurement, rounds: list[Round]):
+    o = meas.spec.torque_output
+    regs = rounds[0].compare.regimes
+    names = [r["regime"] for r in regs]
+    fig, ax = plt.subplots(figsize=(11, 3.8))
+    x = np.arange(len(names))
+    first = [r["outputs"][o]["nrmse"] for r in regs]
+    ax.bar(x - 0.2, first, 0.4, label="starting model", color="#1f77b4")
+    if len(rounds) > 1:
+        last = [r["outputs"][o]["nrmse"] for r in rounds[-1].compare.regimes]
+        ax.bar(x + 0.2, last, 0.4, label=f"after round {len(rounds) - 1}", color="#2ca02c")
+    for i, r in enumerate(regs):
+        if r["failing"]:
+            ax.annotate(
+                "fails",
+                (x[i] - 0.2, first[i]),
+                ha="center",
+                va="bottom",
+                fontsize=8,
+                color="#d62728",
+            )
+    ax.axhline(
+        rounds[0].compare.outputs[o].nrmse,
+        color="#1f77b4",
+        ls=":",
+        lw=1,
+        label="overall, starting model",
+    )
+    ax.set_xticks(x)
+    ax.set_xticklabels(names, rotation=30, ha="right", fontsize=8)
+    ax.set_ylabel(f"{o}: rms residual / std")
+    ax.set_title("error by operating regime")
+    ax.grid(axis="y", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def _fig_error_fall(plt, meas: Measurement, rounds: list[Round]):
+    fig, ax = plt.subplots(figsize=(8, 3.8))
+    labels = ["starting model"] + [f"+ {r.effect}" for r in rounds[1:]]
+    vals = [r.compare.nrmse for r in rounds]
+    x = np.arange(len(vals))
+    ax.bar(x, vals, color=["#1f77b4"] + ["#2ca02c"] * (len(vals) - 1))
+    for i, v in enumerate(vals):
+        ax.annotate(f"{v:.3f}", (x[i], v), ha="center", va="bottom", fontsize=9)
+    ax.set_xticks(x)
+    ax.set_xticklabels(labels, rotation=15, ha="right", fontsize=9)
+    ax.set_ylabel("nrmse (mean over outputs)")
+    ax.set_title("error fall across rounds of adding effects")
+    ax.grid(axis="y", alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+_DRAW = {
+    "overlay": _fig_overlay,
+    "residual": _fig_residual,
+    "residual_vs": _fig_residual_vs,
+    "regimes": _fig_regimes,
+    "error_fall": _fig_error_fall,
+}
+
+
+# ---------------------------------------------------------------- html
+
+_CSS = """
+body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;max-width:1150px;
+margin:2em auto;padding:0 1em;color:#222}
+h1{font-size:1.5em}h2{font-size:1.2em;margin-top:2em;border-bottom:1px solid #ddd}
+table{border-collapse:collapse;margin:.6em 0;font-size:.9em}
+td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}th{background:#f3f3f3}
+td.l,th.l{text-align:left}.fail{color:#c00;font-weight:600}.warn{color:#a60}
+img{max-width:100%;border:1px solid #eee;margin:.5em 0}.small{color:#666;font-size:.85em}
+"""
+
+
+def _e(x: Any) -> str:
+    return html.escape(str(x))
+
+
+def _num(x: Any, fmt: str = ".4g") -> str:
+    try:
+        f = float(x)
+    except (TypeError, ValueError):
+        return _e(x)
+    return format(f, fmt) if np.isfinite(f) else "-"
+
+
+def _params(p: dict) -> str:
+    parts = []
+    for k, v in p.items():
+        if isinstance(v, list):
+            v = "[" + ", ".join(_num(x) for x in v) + "]"
+        elif isinstance(v, (int, float)) and not isinstance(v, bool):
+            v = _num(v)
+        parts.append(f"{_e(k)} = {_e(v)}")
+    return "<br>".join(parts)
+
+
+def _html(meas: Measurement, rounds: list[Round], images: dict[str, bytes], title: str) -> str:
+    h: list[str] = [
+        f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{_e(title)}</title>"
+        f"<style>{_CSS}</style></head><body><h1>{_e(title)}</h1>"
+    ]
+    base = rounds[0].compare
+    cut = ", ".join(
+        f"{k}: " + (f"{_num(v)} Hz" if v else "none") for k, v in base.inputs.cutoffs.items()
+    )
+    h.append(
+        f"<p>Measurement <code>{_e(meas.path)}</code>: {meas.n} samples, dt = {meas.dt:.6g} s, "
+        f"{meas.spec.block} rig. Simulation: open loop, the measured inputs drive the C rig "
+        "from the "
+        f"first sample. Input filter cut-offs (zero phase): {_e(cut)}.</p>"
+    )
+    # summary of rounds
+    h.append(
+        "<h2>Error across rounds</h2><table><tr><th class='l'>round</th><th "
+        "class='l'>effect added</th>"
+        + "".join(f"<th>nrmse {_e(o)}</th>" for o in meas.spec.outputs)
+        + "<th>nrmse</th><th>fit %</th></tr>"
+    )
+    for i, r in enumerate(rounds):
+        h.append(
+            f"<tr><td class='l'>{i}</td><td class='l'>{_e(r.effect or 'starting model')}</td>"
+            + "".join(f"<td>{_num(r.compare.outputs[o].nrmse)}</td>" for o in meas.spec.outputs)
+            + f"<td><b>{_num(r.compare.nrmse)}</b></td>"
+            + f"<td>{_num(100 * (1 - r.compare.nrmse), '.2f')}</td></tr>"
+        )
+    h.append("</table>")
+    if "error_fall" in images:
+        h.append(_img(images["error_fall"], "error fall"))
+    h.append("<h2>Measured vs simulated</h2>")
+    h.append(_img(images["overlay"], "overlay"))
+    h.append("<h2>Where the starting model fails</h2>")
+    h.append(_regime_table(base, meas))
+    h.append(_img(images["residual"], "residual"))
+    h.append(_img(images["regimes"], "regimes"))
+    h.append(_img(images["residual_vs"], "residual signatures"))
+    for i, r in enumerate(rounds):
+        d = r.diagnosis
+        if d is not None:
+            h.append(f"<h2>Diagnosis of round {i} model (nrmse {_num(d.baseline_nrmse)})</h2>")
+            h.append(
+                "<table><tr><th>rank</th><th class='l'>effect</th><th>nrmse after</th><th "
+                "class='l'>how</th>"
+                "<th class='l'>parameters</th><th class='l'>evidence from the residual</th></tr>"
+            )
+            for k, c in enumerate(d.candidates, 1):
+                h.append(
+                    f"<tr><td>{k}</td><td "
+                    f"class='l'><b>{_e(c.effect)}</b></td><td>{_num(c.nrmse_after)}</td>"
+                    f"<td class='l'>{_e(c.method)}</td><td class='l'>{_params(c.parameters)}</td>"
+                    f"<td class='l'>{_e(c.evidence.get('text', ''))}</td></tr>"
+                )
+            h.append("</table>")
+            if d.skipped:
+                h.append(
+                    "<p class='small'>Not candidates: "
+                    + "; ".join(f"{_e(k)} ({_e(v)})" for k, v in d.skipped.items())
+                    + "</p>"
+                )
+        if i + 1 < len(rounds) and rounds[i + 1].fit is not None:
+            f = rounds[i + 1].fit
+            h.append(
+                f"<h2>Round {i + 1}: fit of {_e(f.effect)}: nrmse {_num(f.nrmse_before)} &rarr; "
+                f"{_num(f.nrmse_after)}</h2>"
+            )
+            h.append(
+                "<table><tr><th class='l'>parameter</th><th>value</th><th>std</th><th>before</th>"
+                "<th class='l'>role</th></tr>"
+            )
+            for p in f.fitted:
+                h.append(
+                    "<tr><td "
+                    f"class='l'>{_e(p['name'])}</td><td>{_num(p['value'])}</td><td>{_num(p['std'])}</td>"
+                    f"<td>{_num(p['before']) if p['before'] is not None else ''}</td>"
+                    f"<td class='l'>{_e(p['role'])}</td></tr>"
+                )
+            h.append("</table>")
+            for w in f.warnings:
+                h.append(f"<p class='warn'>warning: {_e(w)}</p>")
+            for n in f.notes:
+                h.append(f"<p class='small'>note: {_e(n)}</p>")
+    h.append(
+        "<p class='small'>nrmse = rms(measured - simulated) / std(measured) per output; the "
+        "overall nrmse "
+        "is their mean (docs/measurement-contract.md). Standard deviations come from the "
+        "Jacobian and "
+        "are lower bounds when the residual is correlated in time.</p></body></html>"
+    )
+    return "\n".join(h)
+
+
+def _regime_table(c: CompareResult, meas: Measurement) -> str:
+    outs = meas.spec.outputs
+    rows = [
+        "<table><tr><th class='l'>regime</th><th class='l'>definition</th><th>share</th>"
+        + "".join(f"<th>{_e(o)} nrmse (x overall)</th>" for o in outs)
+        + "</tr>"
+    ]
+    for r in c.regimes:
+        cls = " class='fail'" if r["failing"] else ""
+        rows.append(
+            f"<tr{cls}><td class='l'>{_e(r['regime'])}</td><td "
+            f"class='l'>{_e(r['description'])}</td>"
+            f"<td>{100 * r['fraction']:.1f} %</td>"
+            + "".join(
+                f"<td>{_num(r['outputs'][o]['nrmse'])} "
+                f"({_num(r['outputs'][o]['ratio'], '.2f')}x)</td>"
+                for o in outs
+            )
+            + "</tr>"
+        )
+    rows.append("</table>")
+    return "".join(rows)
+
+
+def _img(png: bytes, alt: str) -> str:
+    return (
+        f"<img alt='{_e(alt)}' src='data:image/png;base64,{base64.b64encode(png).decode('ascii')}'>"
+    )
+
+
+def write_report(
+    out_dir: str,
+    meas: Measurement,
+    rounds: list[Round],
+    *,
+    title: str = "gearsim report",
+    progress: Callable[[str], None] | None = None,
+) -> dict[str, Any]:
+    """Draw the figures of FIGURES into out_dir/*.png and out_dir/report.html
+    (self-contained). Returns {"html": path, "images": [paths]}."""
+    say = progress or (lambda s: None)
+    plt = _plt()
+    os.makedirs(out_dir, exist_ok=True)
+    images: dict[str, bytes] = {}
+    paths = []
+    for name in FIGURES:
+        if name == "error_fall" and len(rounds) < 2:
+            continue
+        fig = _DRAW[name](plt, meas, rounds)
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=100)
+        plt.close(fig)
+        images[name] = buf.getvalue()
+        p = os.path.join(out_dir, f"{name}.png")
+        with open(p, "wb") as fh:
+            fh.write(images[name])
+        paths.append(p)
+        say(f"report: drew {name}.png")
+    page = os.path.join(out_dir, "report.html")
+    with open(page, "w", encoding="utf-8") as fh:
+        fh.write(_html(meas, rounds, images, title))
+    return {"html": page, "images": paths}

@@ -1,0 +1,103 @@
+"""Signal helpers: zero-phase low-pass filtering and its automatic cut-off.
+
+Offline analysis may filter without delay. ``zero_phase_lowpass`` applies the
+squared magnitude of an order-``order`` Butterworth low-pass in the frequency
+domain, which is what ``scipy.signal.filtfilt`` of that Butterworth filter does
+(zero phase, -6 dB at the cut-off), with odd reflection of ``pad`` samples at
+both ends, as filtfilt does, so that edges keep their value and slope. It needs
+numpy only (no scipy import on the ``compare`` path).
+
+``auto_cutoff`` picks a cut-off from the signal's own spectrum: the noise floor
+is the median power density in the upper half of the band; the cut-off is twice
+the highest frequency whose (smoothed) density still stands 30x above that
+floor, clamped to [fs/500, fs/8]. Quantized or noisy speeds get filtered where
+they are only noise; clean signals are barely touched.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["zero_phase_lowpass", "auto_cutoff", "derivative", "smooth_sign"]
+
+
+def _next_pow2(n: int) -> int:
+    return 1 << max(0, int(n - 1).bit_length())
+
+
+def zero_phase_lowpass(x: np.ndarray, cutoff_hz: float, fs_hz: float, order: int = 4) -> np.ndarray:
+    """Zero-phase low-pass of x (same unit), cut-off in Hz, sample rate fs in Hz.
+
+    Equivalent in magnitude to forward-backward filtering with an order-`order`
+    Butterworth filter: |H(f)|^2 = 1 / (1 + (f/fc)^(2*order))."""
+    x = np.asarray(x, dtype=float)
+    n = x.size
+    if n < 3 or not (cutoff_hz > 0.0) or cutoff_hz >= 0.5 * fs_hz:
+        return x.copy()
+    pad = int(min(n - 1, max(16, round(3.0 * fs_hz / cutoff_hz))))
+    head = 2.0 * x[0] - x[pad:0:-1]
+    tail = 2.0 * x[-1] - x[-2 : -pad - 2 : -1]
+    xe = np.concatenate([head, x, tail])
+    nfft = _next_pow2(xe.size)
+    spec = np.fft.rfft(xe, nfft)
+    f = np.fft.rfftfreq(nfft, d=1.0 / fs_hz)
+    spec *= 1.0 / (1.0 + (f / cutoff_hz) ** (2 * order))
+    y = np.fft.irfft(spec, nfft)[: xe.size]
+    return y[pad : pad + n]
+
+
+def _psd(x: np.ndarray, fs_hz: float, nseg: int = 1024) -> tuple[np.ndarray, np.ndarray]:
+    """Averaged periodogram (Hann window, 50 % overlap); returns f (Hz), P."""
+    x = np.asarray(x, dtype=float)
+    x = x - np.mean(x)
+    nseg = int(min(nseg, _next_pow2(x.size) // 2 if x.size >= 64 else x.size))
+    nseg = max(nseg, 16)
+    if x.size < nseg:
+        x = np.pad(x, (0, nseg - x.size))
+    step = nseg // 2
+    starts = np.arange(0, x.size - nseg + 1, step)
+    # bound the cost on long records: at most 400 segments, spread evenly
+    if starts.size > 400:
+        starts = starts[np.linspace(0, starts.size - 1, 400).astype(int)]
+    w = np.hanning(nseg)
+    idx = starts[:, None] + np.arange(nseg)[None, :]
+    segs = x[idx]
+    segs = segs - segs.mean(axis=1, keepdims=True)
+    p = np.mean(np.abs(np.fft.rfft(segs * w, axis=1)) ** 2, axis=0)
+    return np.fft.rfftfreq(nseg, d=1.0 / fs_hz), p
+
+
+def auto_cutoff(x: np.ndarray, fs_hz: float) -> float | None:
+    """Cut-off (Hz) that separates x from its broadband noise, or None when x is
+    constant. See the module docstring for the rule."""
+    x = np.asarray(x, dtype=float)
+    if x.size < 64 or float(np.ptp(x)) == 0.0:
+        return None
+    f, p = _psd(x, fs_hz)
+    upper = f >= 0.5 * f[-1]
+    floor = float(np.median(p[upper]))
+    lo, hi = fs_hz / 500.0, fs_hz / 8.0
+    if floor <= 0.0:
+        return hi
+    # light smoothing of the density over 5 bins
+    ps = np.convolve(p, np.ones(5) / 5.0, mode="same")
+    above = np.nonzero(ps > 30.0 * floor)[0]
+    if above.size == 0:
+        return lo
+    f_sig = float(f[above[-1]])
+    return float(min(max(2.0 * f_sig, lo), hi))
+
+
+def derivative(x: np.ndarray, dt: float) -> np.ndarray:
+    """Central-difference derivative (one-sided at the ends), unit of x per s."""
+    x = np.asarray(x, dtype=float)
+    if x.size < 2:
+        return np.zeros_like(x)
+    return np.gradient(x, dt)
+
+
+def smooth_sign(x: np.ndarray, threshold: float) -> np.ndarray:
+    """tanh(4 x / threshold): the smoothed sign used by the C core's friction laws."""
+    if threshold <= 0.0:
+        return np.sign(x)
+    return np.tanh(4.0 * np.asarray(x, dtype=float) / threshold)

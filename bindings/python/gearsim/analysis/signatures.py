@@ -1,0 +1,408 @@
+"""Residual signatures: the regressors that tell physical effects apart.
+
+The drive torque residual ``r = measured - simulated`` is referred to the
+driven side (follower shaft N*m, or rack N): ``r_d = r / k`` with ``k`` the
+signed kinematic ratio driven speed / base speed. By power balance, any extra
+force ``F`` that the drive must overcome on the driven side shows up as
+``r_d = F``, whatever the gear ratio and directions. Each effect of the
+contract has a signature in ``r_d`` that holds for any real rig:
+
+==============================  ==========================================================
+column                          physics
+==============================  ==========================================================
+``acceleration``  a             inertia error: ``dJ * a``
+``speed``         v             viscous friction: ``mu * v``
+``sign``          sgn(v)        Coulomb friction: ``Fc * sgn(v)`` (tanh-smoothed)
+``constant``      -1            constant load offset: ``-offset`` (a load pushing along +)
+``mesh``          abs(T)*sgn(v) meshing loss proportional to the transmitted torque T:
+                                ``L*abs(T)*sgn(v)`` with L = 1-eta (load overruns) or
+                                1/eta-1 (drive drives)
+``mesh@Ti``       mesh*h_i(T)   mesh loss weighted by linear-interpolation hats of the
+                                temperature: a loss that changes with temperature
+==============================  ==========================================================
+
+Load-dependent efficiency is ``tau_idle*sgn(v) + k*abs(T)*sgn(v)``: a Coulomb
+part plus a part that grows with load. Backlash has no linear signature: its
+evidence is residual energy concentrated right after reversals of the
+transmitted torque, and a driven-speed residual whose integral over such a
+window is the gap (:func:`backlash_evidence`).
+
+Screening (:func:`screen`) regresses ``r_d`` on the columns of the parameters
+the model already has (they are re-estimated when an effect is fitted) plus
+the candidate's own columns, with the physical sign constraints, by bounded
+linear least squares. It predicts the error after fitting, seeds the fit, and
+gives the evidence: the candidate's partial correlation with the residual,
+its coefficients, and the regime where its contribution is largest.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from . import modelkit as mk
+from .measurement import Measurement
+from .regimes import Regime, sign_changes
+from .simulate import Inputs, Simulation
+
+__all__ = [
+    "Context",
+    "build_context",
+    "ScreenResult",
+    "screen",
+    "backlash_evidence",
+    "temperature_hats",
+]
+
+
+@dataclass
+class Context:
+    """Everything the signatures need, computed once per baseline.
+
+    Arrays are per sample, driven-side units (N*m and rad/s for the gear's
+    follower, N and m/s for the rack) unless noted."""
+
+    model: Any
+    meas: Measurement
+    inputs: Inputs
+    sim: Simulation
+    kin: float  # driven speed / base speed (signed)
+    residual: dict[str, np.ndarray]  # measured - simulated per output (output units)
+    std: dict[str, float]  # std of each measured output
+    base_nrmse: dict[str, float]
+    v: np.ndarray  # driven speed (simulated from the measured input)
+    a: np.ndarray  # driven acceleration
+    T: np.ndarray  # transmitted torque/force at the driven port (w/o viscous)
+    temperature: np.ndarray  # K, measured or simulated (or proxy)
+    temperature_source: str
+    regimes: list[Regime]
+    idx: np.ndarray  # samples used by the regressions
+    columns: dict[str, np.ndarray] = field(default_factory=dict)
+
+    @property
+    def torque_output(self) -> str:
+        return self.meas.spec.torque_output
+
+    @property
+    def speed_output(self) -> str:
+        return self.meas.spec.speed_output
+
+    @property
+    def r_d(self) -> np.ndarray:
+        return self.residual[self.torque_output] / self.kin
+
+    def overall_nrmse(self, torque_nrmse: float, speed_nrmse: float | None = None) -> float:
+        s = self.base_nrmse[self.speed_output] if speed_nrmse is None else speed_nrmse
+        return 0.5 * (torque_nrmse + s)
+
+
+def _sgn(x: np.ndarray, threshold: float) -> np.ndarray:
+    return np.tanh(4.0 * x / max(threshold, 1e-12))
+
+
+def temperature_hats(temp: np.ndarray, breakpoints: np.ndarray) -> np.ndarray:
+    """Linear-interpolation basis: column i is the weight of breakpoint i in
+    interp(temp, breakpoints, values), clamped at the ends. Shape (n, len(bp))."""
+    bp = np.asarray(breakpoints, dtype=float)
+    eye = np.eye(bp.size)
+    return np.column_stack([np.interp(temp, bp, eye[i]) for i in range(bp.size)])
+
+
+def temperature_breakpoints(temp: np.ndarray) -> np.ndarray:
+    lo, hi = float(np.percentile(temp, 1)), float(np.percentile(temp, 99))
+    if hi - lo < 1e-6:
+        hi = lo + 1.0
+    return np.round(np.array([lo, 0.5 * (lo + hi), hi]), 2)
+
+
+def build_context(
+    model: Any,
+    meas: Measurement,
+    inputs: Inputs,
+    sim: Simulation,
+    regimes: list[Regime],
+    max_rows: int = 200_000,
+) -> Context:
+    spec = meas.spec
+    kin = mk.kinematic_ratio(model)
+    residual = {o: meas[o] - sim.outputs[o] for o in spec.outputs}
+    std = {o: float(np.std(meas[o])) for o in spec.outputs}
+    base_nrmse = {
+        o: float(np.sqrt(np.mean(residual[o] ** 2)) / std[o]) if std[o] > 0 else float("inf")
+        for o in spec.outputs
+    }
+    sig = sim.signals
+    v = sig.get("driven_speed", sim.outputs[spec.speed_output])
+    if mk.block_values(model).get("backlash_enabled", False):
+        v = inputs.base_speed * kin  # rigid kinematics: the signatures describe the mesh motion
+    a = sig.get("driven_acceleration")
+    if a is None:
+        a = np.gradient(v, meas.dt)
+    tau_f = sig.get("driven_port_torque")
+    mu_f = mk.viscous_value(model)
+    if tau_f is None:
+        tau_f = -sim.outputs[spec.torque_output] / kin
+    T = tau_f - mu_f * v
+    if meas.has_temperature:
+        temp, tsrc = meas["temperature"], "measured"
+    else:
+        temp = sig.get("temperature")
+        tsrc = "simulated"
+        if temp is None:
+            temp = np.full(meas.n, float(mk.block_values(model).get("initial_temperature", 300.0)))
+    n = meas.n
+    step = max(1, int(np.ceil(n / max_rows)))
+    idx = np.arange(0, n, step)
+    ctx = Context(
+        model=model,
+        meas=meas,
+        inputs=inputs,
+        sim=sim,
+        kin=kin,
+        residual=residual,
+        std=std,
+        base_nrmse=base_nrmse,
+        v=v,
+        a=a,
+        T=T,
+        temperature=np.asarray(temp, float),
+        temperature_source=tsrc,
+        regimes=regimes,
+        idx=idx,
+    )
+    rig = mk.rig_values(model)
+    blk = mk.block_values(model)
+    vmax = float(np.percentile(np.abs(v), 99)) or 1.0
+    vth = float(rig.get("load_coulomb_speed_threshold", 1e-3))
+    # smoothing of the sign: the model's threshold, but never sharper than the
+    # speed resolution of the data (0.5 % of the speed range)
+    sgn = _sgn(v, max(vth, 0.005 * vmax))
+    mesh = np.abs(T) * sgn
+    ctx.columns = {
+        "acceleration": a,
+        "speed": v,
+        "sign": sgn,
+        "constant": -np.ones(n),
+        "mesh": mesh,
+        "idle": _sgn(v, max(float(blk.get("speed_threshold", 0.01)), 0.005 * vmax)),
+    }
+    return ctx
+
+
+def thermal_proxy(ctx: Context, loss_power: np.ndarray) -> np.ndarray:
+    """Temperature the model's thermal mass would reach with this loss power
+    (explicit Euler of C dT/dt = P + (T_amb - T)/R_th), in K."""
+    blk = mk.block_values(ctx.model)
+    rig = mk.rig_values(ctx.model)
+    c = float(blk.get("thermal_mass", 50.0))
+    t0 = float(blk.get("initial_temperature", 300.0))
+    r = rig.get("thermal_resistance")
+    amb = float(rig.get("ambient_temperature", 293.15))
+    dt = ctx.meas.dt
+    out = np.empty_like(loss_power)
+    t = t0
+    g = 0.0 if r is None else dt / (c * float(r))
+    k = dt / c
+    # vectorised first-order recursion via cumulative sums when adiabatic
+    if r is None:
+        return t0 + np.cumsum(loss_power) * k
+    for i, p in enumerate(loss_power):  # pragma: no cover - rarely used, short records only
+        t = t + k * p + g * (amb - t)
+        out[i] = t
+    return out
+
+
+@dataclass
+class ScreenResult:
+    """One bounded linear regression of the driven-side residual.
+
+    names: the columns; coef: their fitted coefficients (deltas to the present
+    values); nuisance: how many leading columns are re-estimated existing
+    parameters; torque_nrmse/nrmse: predicted errors after the fit;
+    explained: the fitted residual of the candidate's own columns (driven
+    units, all samples); partial_r: correlation of the candidate's part with the
+    residual left by the nuisance columns."""
+
+    names: list[str]
+    coef: np.ndarray
+    nuisance: int
+    torque_nrmse: float
+    nrmse: float
+    explained: np.ndarray
+    partial_r: float
+    r2_gain: float
+
+    def coefficient(self, name: str) -> float:
+        return float(self.coef[self.names.index(name)])
+
+
+def screen(
+    ctx: Context,
+    nuisance: list[tuple[str, np.ndarray, tuple[float, float]]],
+    own: list[tuple[str, np.ndarray, tuple[float, float]]],
+) -> ScreenResult:
+    """Bounded least squares of r_d on nuisance + own columns (each given as
+    (name, column over all samples, (lower, upper) bound of its coefficient))."""
+    from scipy.optimize import lsq_linear
+
+    cols = nuisance + own
+    idx = ctx.idx
+    y = ctx.r_d[idx]
+    if not cols:
+        tn = ctx.base_nrmse[ctx.torque_output]
+        return ScreenResult(
+            [], np.zeros(0), 0, tn, ctx.overall_nrmse(tn), np.zeros(ctx.meas.n), 0.0, 0.0
+        )
+    X = np.column_stack([c[1][idx] for c in cols])
+    scale = np.sqrt(np.mean(X * X, axis=0))
+    scale[scale == 0] = 1.0
+    lb = np.array([c[2][0] for c in cols]) * scale
+    ub = np.array([c[2][1] for c in cols]) * scale
+    Xs = X / scale
+    res = lsq_linear(
+        Xs, y, bounds=(lb, ub), method="bvls" if Xs.shape[1] <= 12 else "trf", lsmr_tol="auto"
+    )
+    beta = res.x / scale
+    fitted_all = np.column_stack([c[1] for c in cols]) @ beta
+    r_after = ctx.r_d - fitted_all
+    tn = float(np.sqrt(np.mean((r_after * ctx.kin) ** 2)) / ctx.std[ctx.torque_output])
+    nn = len(nuisance)
+    own_part = (np.column_stack([c[1] for c in own]) @ beta[nn:]) if own else np.zeros(ctx.meas.n)
+    # partial correlation of the own part with the residual left by the nuisance
+    if nn:
+        Xn = Xs[:, :nn]
+        bn, *_ = np.linalg.lstsq(Xn, y, rcond=None)
+        y_perp = y - Xn @ bn
+    else:
+        y_perp = y
+    op = own_part[idx]
+    if nn and np.any(op):
+        bo, *_ = np.linalg.lstsq(Xs[:, :nn], op, rcond=None)
+        op = op - Xs[:, :nn] @ bo
+    den = float(np.linalg.norm(y_perp) * np.linalg.norm(op))
+    pr = float(np.dot(y_perp, op) / den) if den > 0 else 0.0
+    ss_perp = float(np.dot(y_perp, y_perp))
+    r_fin = r_after[idx]
+    gain = 1.0 - float(np.dot(r_fin, r_fin)) / ss_perp if ss_perp > 0 else 0.0
+    return ScreenResult(
+        [c[0] for c in cols], beta, nn, tn, ctx.overall_nrmse(tn), own_part, pr, gain
+    )
+
+
+@dataclass
+class BacklashEvidence:
+    """Residual concentration after reversals of the transmitted torque.
+
+    events: sample indices of the reversals; window: samples after each;
+    concentration: (share of residual energy inside the windows) / (share of
+    time inside them), per output; gap_estimate: median |integral of the
+    driven-speed residual| over a window, converted to pitch-line metres;
+    predicted_nrmse: overall nrmse if the excess energy in the windows were
+    explained."""
+
+    events: np.ndarray
+    window: int
+    concentration: dict[str, float]
+    time_fraction: float
+    gap_estimate: float
+    predicted_nrmse: float
+    mask: np.ndarray
+
+    speed_output: str = ""
+
+    @property
+    def strength(self) -> float:
+        """Concentration of the driven-speed residual: a rigid mesh cannot
+        make the driven speed deviate from the kinematics, so this is the
+        evidence specific to backlash (~1 without it)."""
+        return float(self.concentration.get(self.speed_output, 0.0))
+
+
+def backlash_evidence(ctx: Context) -> BacklashEvidence:
+    """Backlash screening: where does the residual sit relative to reversals
+    of the transmitted torque (and of the motion)?
+
+    The event-locked mean of the normalised squared residual (both outputs)
+    over the time since the last reversal shows a burst right after the
+    reversal when teeth cross the gap and hit the other flank; the burst's end
+    (where the profile falls back under 1.5x its overall level) sets the
+    window. Without backlash-like physics the profile is flat and the
+    concentration ~ 1."""
+    meas = ctx.meas
+    n = meas.n
+    dt = meas.dt
+    T = ctx.T
+    tmax = float(np.percentile(np.abs(T), 99)) or 1.0
+    ev = sign_changes(T, 0.05 * tmax)
+    spd = ctx.v
+    ev_v = sign_changes(spd, 0.05 * (float(np.percentile(np.abs(spd), 99)) or 1.0))
+    events = np.unique(np.concatenate([ev, ev_v]))
+    # merge events closer than 5 samples
+    if events.size > 1:
+        keep = np.concatenate([[True], np.diff(events) >= 5])
+        events = events[keep]
+    mask = np.zeros(n, dtype=bool)
+    outputs = meas.spec.outputs
+    if events.size == 0:
+        tn = ctx.base_nrmse[ctx.torque_output]
+        return BacklashEvidence(
+            events,
+            0,
+            {o: 1.0 for o in outputs},
+            0.0,
+            0.0,
+            ctx.overall_nrmse(tn),
+            mask,
+            ctx.speed_output,
+        )
+    norm = {o: ctx.residual[o] ** 2 / (ctx.std[o] ** 2 or 1.0) for o in outputs}
+    e2 = norm[outputs[0]] + norm[outputs[1]]
+    level = float(np.mean(e2))
+    gaps = np.diff(np.concatenate([events, [n]]))
+    wmax = int(max(5, min(round(0.25 / dt), np.median(gaps))))
+    prof = np.zeros(wmax)
+    cnt = np.zeros(wmax)
+    for e in events:
+        seg = e2[e : e + wmax]
+        prof[: seg.size] += seg
+        cnt[: seg.size] += 1
+    prof = prof / np.maximum(cnt, 1)
+    k = np.convolve(prof, np.ones(3) / 3.0, mode="same")
+    peak = int(np.argmax(k))
+    window = 5
+    if k[peak] > 2.0 * level:
+        below = np.nonzero(k[peak:] < 1.5 * level)[0]
+        window = peak + (int(below[0]) if below.size else wmax - peak)
+    window = int(min(max(window, 5), wmax))
+    for e in events:
+        mask[e : e + window] = True
+    frac = float(mask.mean())
+    conc = {}
+    after = {}
+    for o in outputs:
+        r = ctx.residual[o]
+        tot = float(np.sum(r * r))
+        inside = float(np.sum(r[mask] ** 2))
+        conc[o] = (inside / tot) / frac if tot > 0 and frac > 0 else 1.0
+        if mask.any() and float(np.sqrt(inside / mask.sum())) < 0.005 * (ctx.std[o] or 1.0):
+            # the output matches within 0.5 % of its spread even right after
+            # the reversals: no evidence in it
+            conc[o] = 0.0
+        out_level = float(np.mean(r[~mask] ** 2)) if (~mask).any() else 0.0
+        excess = max(0.0, inside - out_level * mask.sum())
+        e_after = max(0.0, tot - excess)
+        after[o] = float(np.sqrt(e_after / n)) / ctx.std[o] if ctx.std[o] > 0 else 0.0
+    # gap: integral of the driven-speed residual over each window
+    rs = ctx.residual[ctx.speed_output]
+    # reversals where the teeth crossed the gap integrate to ~b, the others
+    # (motion reversals under a load that keeps the contact) to ~0: take the
+    # median of the upper cluster
+    disp = np.array([abs(float(np.sum(rs[e : e + window]) * dt)) for e in events])
+    gap = 0.0
+    if disp.size:
+        upper = disp[disp >= 0.5 * np.percentile(disp, 90)]
+        gap = float(np.median(upper)) * mk.driven_radius(ctx.model)
+    pred = ctx.overall_nrmse(after[ctx.torque_output], after[ctx.speed_output])
+    return BacklashEvidence(events, window, conc, frac, gap, pred, mask, ctx.speed_output)

@@ -1,0 +1,155 @@
+"""Open-loop simulation of a model on a measurement's inputs, through the C rig.
+
+The measured inputs drive the model's rig from the first sample; the outputs
+are never fed back (docs/measurement-contract.md section 4). One batch call of
+``Rig.run`` per simulation: the loop runs in C.
+
+Input conditioning (documented, offline only): the rig is speed-driven and
+needs the acceleration of the measured speed for the inertia torque. Raw
+measured speeds are noisy and quantized, so by default each input is passed
+through a zero-phase low-pass (:func:`gearsim.analysis.signals.zero_phase_lowpass`,
+4th-order Butterworth magnitude squared) whose cut-off is chosen from the
+input's own spectrum (:func:`gearsim.analysis.signals.auto_cutoff`). Pass
+``input_filter=None`` to feed the raw samples, or a number (Hz) to fix the
+cut-off for every input.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from . import modelkit as mk
+from .measurement import Measurement
+from .signals import auto_cutoff, zero_phase_lowpass
+
+__all__ = ["Inputs", "prepare_inputs", "Simulation", "simulate", "simulate_outputs"]
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """Rig inputs derived from a measurement (SI units, one value per sample).
+
+    cutoffs: input column -> cut-off (Hz) applied, or None when unfiltered."""
+
+    base_speed: np.ndarray
+    load: np.ndarray
+    measured_temperature: np.ndarray | None
+    ambient_temperature: np.ndarray | None
+    dt: float
+    cutoffs: Mapping[str, float | None] = field(default_factory=dict)
+
+    def slice(self, start: int, stop: int) -> Inputs:
+        def s(x):
+            return None if x is None else x[start:stop]
+
+        return Inputs(
+            self.base_speed[start:stop],
+            self.load[start:stop],
+            s(self.measured_temperature),
+            s(self.ambient_temperature),
+            self.dt,
+            self.cutoffs,
+        )
+
+
+def prepare_inputs(meas: Measurement, input_filter: float | str | None = "auto") -> Inputs:
+    """Rig inputs of a measurement, conditioned by the zero-phase input filter.
+
+    input_filter: "auto" (cut-off per input from its spectrum), a cut-off in
+    Hz for every input, or None (raw samples)."""
+    fs = 1.0 / meas.dt
+    cutoffs: dict[str, float | None] = {}
+
+    def cond(name: str) -> np.ndarray:
+        x = meas[name]
+        if input_filter is None or input_filter == "none":
+            cutoffs[name] = None
+            return x
+        fc = auto_cutoff(x, fs) if input_filter == "auto" else float(input_filter)
+        if fc is None or fc >= 0.5 * fs:
+            cutoffs[name] = None
+            return x
+        cutoffs[name] = fc
+        return zero_phase_lowpass(x, fc, fs)
+
+    spec = meas.spec
+    speed = cond(spec.speed_input)
+    load = cond(spec.load_input)
+    temp = cond("temperature") if meas.has_temperature else None
+    amb = cond("ambient_temperature") if meas.has_ambient else None
+    return Inputs(speed, load, temp, amb, meas.dt, cutoffs)
+
+
+@dataclass
+class Simulation:
+    """Simulated outputs (canonical output names) plus the rig's other signals.
+
+    outputs: {torque output: base torque (N*m), speed output: driven speed}.
+    signals: the RigResult arrays by name (driven_speed, driven_port_torque,
+    driven_acceleration, temperature, mesh_loss_power, ...)."""
+
+    outputs: dict[str, np.ndarray]
+    signals: dict[str, np.ndarray]
+
+
+_SIGNALS = (
+    "base_torque",
+    "driven_speed",
+    "driven_port_torque",
+    "driven_acceleration",
+    "temperature",
+    "mesh_loss_power",
+    "loss_power",
+    "base_speed",
+    "backlash_position",
+    "contact_force",
+    "driven_position",
+)
+
+
+def run_rig(model: Any, inputs: Inputs, temperature_input: bool) -> Any:
+    rig = model.rig(dt=inputs.dt, temperature_input=temperature_input)
+    kw: dict[str, Any] = {"base_speed": inputs.base_speed, "load": inputs.load}
+    if inputs.ambient_temperature is not None:
+        kw["ambient_temperature"] = inputs.ambient_temperature
+    if temperature_input and inputs.measured_temperature is not None:
+        kw["measured_temperature"] = inputs.measured_temperature
+    return rig.run(**kw)
+
+
+def simulate(
+    model: Any, meas: Measurement, inputs: Inputs | None = None, signals: tuple[str, ...] = _SIGNALS
+) -> Simulation:
+    """Run the model's rig open-loop on the measurement's inputs."""
+    if inputs is None:
+        inputs = prepare_inputs(meas)
+    res = run_rig(model, inputs, temperature_input=inputs.measured_temperature is not None)
+    spec = meas.spec
+    outputs = {
+        spec.torque_output: np.asarray(res.base_torque, dtype=float),
+        spec.speed_output: np.asarray(res.driven_speed, dtype=float),
+    }
+    sig = {}
+    for name in signals:
+        val = getattr(res, name, None)
+        if val is not None:
+            sig[name] = np.asarray(val, dtype=float)
+    return Simulation(outputs, sig)
+
+
+def simulate_outputs(model: Any, meas: Measurement, inputs: Inputs) -> dict[str, np.ndarray]:
+    """Only the two simulated outputs (the fitting loop's call)."""
+    res = run_rig(model, inputs, temperature_input=inputs.measured_temperature is not None)
+    spec = meas.spec
+    return {
+        spec.torque_output: np.asarray(res.base_torque, dtype=float),
+        spec.speed_output: np.asarray(res.driven_speed, dtype=float),
+    }
+
+
+def kinematic_ratio(model: Any) -> float:
+    return mk.kinematic_ratio(model)
