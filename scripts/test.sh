@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs every gearsim test, installing what is missing first (scripts/setup.sh):
-#   1. the C core in double and float precision (cmocka under CTest);
+#   1. the C core in double and float precision (cmocka under CTest), and
+#      consumers of the installed CMake package and pkg-config file;
 #   2. firmware: Cortex-M4F build, QEMU run bit-exact with the host, size,
 #      symbol and stack checks (scripts/firmware_check.sh);
 #   3. hardening: sanitizers, valgrind, bounded libFuzzer runs, edge
@@ -23,6 +24,9 @@ for precision in double float; do
   cmake --build "$dir" -j "$jobs" >/dev/null
   ctest --test-dir "$dir" --output-on-failure -j "$jobs"
 done
+
+stage "CMake package and pkg-config consumers"
+scripts/package_check.sh
 
 stage "firmware (Cortex-M4F under QEMU)"
 scripts/firmware_check.sh
