@@ -122,13 +122,8 @@ gs_real gs_contact_solve(gs_mesh_ *m, gs_real x, gs_real u_free, gs_real h, gs_r
         gs_real lo = f0 > GS_R(0.0) ? u_free - c * f0 : u_free;
         gs_real hi = f0 > GS_R(0.0) ? u_free : u_free - c * f0;
         const gs_real tolerance = NEWTON_TOLERANCE * (gs_abs(u_free) + c * gs_abs(f0));
-        gs_real f = f0;          /* f, dfdu and f_spring at u */
-        int evaluated_at_u = 1;
+        gs_real f = f0; /* f, dfdu and f_spring are those at u */
         for (int i = 0; i < NEWTON_ITERATIONS; ++i) {
-            if (!evaluated_at_u) {
-                f = contact_force_d(m, x + h * u, u, h, &dfdu, f_spring);
-                evaluated_at_u = 1;
-            }
             const gs_real phi = u - u_free + c * f;
             if (phi > GS_R(0.0)) {
                 hi = u;
@@ -142,24 +137,20 @@ gs_real gs_contact_solve(gs_mesh_ *m, gs_real x, gs_real u_free, gs_real h, gs_r
              * the bracket shrinks every iteration. */
             const gs_real slope = GS_R(1.0) + c * dfdu;
             gs_real next = slope > GS_R(0.0) ? u - phi / slope : lo;
-            if (gs_abs(next - u) <= tolerance && next >= lo && next <= hi) {
-                u = next; /* converged */
-                evaluated_at_u = 0;
-                break;
-            }
-            if (!(next > lo && next < hi)) {
+            const int converged = gs_abs(next - u) <= tolerance && next >= lo && next <= hi;
+            if (!converged && !(next > lo && next < hi)) {
                 next = GS_R(0.5) * (lo + hi);
             }
             u = next;
-            evaluated_at_u = 0;
+            f = contact_force_d(m, x + h * u, u, h, &dfdu, f_spring);
+            if (converged) {
+                break;
+            }
         }
         /* The force consistent with the impulse balance. At a root it equals
          * f(u); where the contact law jumps (damping at first contact) Phi has no
          * root and this picks the force inside the jump that stops the closing
          * motion there, instead of the full jump value. */
-        if (!evaluated_at_u) {
-            (void)contact_force_d(m, x + h * u, u, h, &dfdu, f_spring);
-        }
         *force = (u_free - u) / c;
         if ((*force - *f_spring) * u < GS_R(0.0) && gs_abs(x) <= m->half_gap) {
             /* First contact: the root sits on a jump of the law (damping
