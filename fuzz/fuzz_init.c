@@ -97,7 +97,7 @@ static void check_error(gs_status st, const gs_error *err, int pattern_ok)
         }
         return;
     }
-    FZ_CHECK(st <= GS_E_NULL && st >= GS_E_SUBSTEPS, "status %d is not one of gs_status", (int)st);
+    FZ_CHECK(st <= GS_E_NULL && st >= GS_STATUS_MIN, "status %d is not one of gs_status", (int)st);
     FZ_CHECK(pattern_ok, "failed init (status %d) modified the model", (int)st);
     if (err != NULL) {
         FZ_CHECK(err->status == st, "err->status %d != returned %d", (int)err->status, (int)st);

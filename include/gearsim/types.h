@@ -60,6 +60,9 @@ typedef enum {
     GS_E_MAGNITUDE = -16            /* so small that its reciprocal overflows gs_real */
 } gs_status;
 
+/* The most negative status: every status lies in [GS_STATUS_MIN, GS_OK]. */
+#define GS_STATUS_MIN GS_E_MAGNITUDE
+
 /* Returns a static, human-readable description of a status (never NULL). */
 const char *gs_status_str(gs_status status);
 

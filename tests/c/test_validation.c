@@ -73,6 +73,13 @@ GM(g_ratio_zero, p->teeth_ratio = R(0.0))
 GM(g_ratio_neg, p->teeth_ratio = R(-2.0))
 GM(g_ratio_nan, p->teeth_ratio = R(NAN))
 GM(g_ratio_inf, p->teeth_ratio = R(INFINITY))
+/* positive, but 1/x overflows gs_real (a subnormal of the precision) */
+#ifdef GS_SINGLE_PRECISION
+#define TINY_POSITIVE 1e-44f
+#else
+#define TINY_POSITIVE 1e-310
+#endif
+GM(g_ratio_tiny, p->teeth_ratio = TINY_POSITIVE)
 GM(g_rot_bad, p->output_shaft_rotates = BAD_ENUM(gs_output_rotation, 7))
 GM(g_fric_bad, p->friction_model = BAD_ENUM(gs_friction_model, 9))
 GM(g_fric_neg, p->friction_model = BAD_ENUM(gs_friction_model, -1))
@@ -174,6 +181,7 @@ static const gear_case gear_cases[] = {
     {"teeth_ratio < 0", g_ratio_neg, GS_E_NOT_POSITIVE, "teeth_ratio", NULL, GS_OK},
     {"teeth_ratio NaN", g_ratio_nan, GS_E_NOT_FINITE, "teeth_ratio", NULL, GS_OK},
     {"teeth_ratio inf", g_ratio_inf, GS_E_NOT_FINITE, "teeth_ratio", NULL, GS_OK},
+    {"teeth_ratio subnormal", g_ratio_tiny, GS_E_MAGNITUDE, "teeth_ratio", NULL, GS_OK},
     {"output_shaft_rotates bad", g_rot_bad, GS_E_OPTION, "output_shaft_rotates", NULL, GS_OK},
     {"friction_model bad", g_fric_bad, GS_E_OPTION, "friction_model", NULL, GS_OK},
     {"friction_model -1", g_fric_neg, GS_E_OPTION, "friction_model", NULL, GS_OK},
@@ -474,6 +482,7 @@ RGM(rg_dt_zero, p->dt_s = R(0.0))
 RGM(rg_dt_neg, p->dt_s = R(-1e-3))
 RGM(rg_dt_nan, p->dt_s = R(NAN))
 RGM(rg_dt_inf, p->dt_s = R(INFINITY))
+RGM(rg_dt_tiny, p->dt_s = TINY_POSITIVE)
 RGM(rg_J_zero, p->driven_inertia = R(0.0))
 RGM(rg_J_neg, p->driven_inertia = R(-0.05))
 RGM(rg_J_nan, p->driven_inertia = R(NAN))
@@ -503,6 +512,7 @@ static const rig_case rig_cases[] = {
     /* types.h: "dt must be > 0 and finite" (STEP_SIZE) vs "NaN -> NOT_FINITE" */
     {"dt NaN", rg_dt_nan, GS_E_STEP_SIZE, GS_E_NOT_FINITE, "dt", "dt"},
     {"dt inf", rg_dt_inf, GS_E_STEP_SIZE, GS_E_NOT_FINITE, "dt", "dt"},
+    {"dt subnormal", rg_dt_tiny, GS_E_MAGNITUDE, GS_OK, "dt", "dt"},
     {"driven inertia 0", rg_J_zero, GS_E_NOT_POSITIVE, GS_OK, "follower_inertia", "rack_mass"},
     {"driven inertia < 0", rg_J_neg, GS_E_NOT_POSITIVE, GS_OK, "follower_inertia", "rack_mass"},
     {"driven inertia NaN", rg_J_nan, GS_E_NOT_FINITE, GS_OK, "follower_inertia", "rack_mass"},
@@ -601,7 +611,7 @@ static void test_status_strings(void **state)
         assert_non_null(s);
         assert_true(strlen(s) > 0);
     }
-    for (c = GS_E_SUBSTEPS; c <= GS_OK; ++c)
+    for (c = GS_STATUS_MIN; c <= GS_OK; ++c)
         for (d = c + 1; d <= GS_OK; ++d)
             if (strcmp(gs_status_str((gs_status)c), gs_status_str((gs_status)d)) == 0) {
                 print_error("statuses %d and %d share the message '%s'\n", c, d,

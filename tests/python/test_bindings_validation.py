@@ -22,6 +22,7 @@ SIMPLE_GEAR_CASES = [
     ({"teeth_ratio": -2.0}, "teeth_ratio", "GS_E_NOT_POSITIVE"),
     ({"teeth_ratio": NAN}, "teeth_ratio", "GS_E_NOT_FINITE"),
     ({"teeth_ratio": INF}, "teeth_ratio", "GS_E_NOT_FINITE"),
+    ({"teeth_ratio": 1e-310}, "teeth_ratio", "GS_E_MAGNITUDE"),  # 1/g overflows
     ({"output_shaft_rotates": "sideways"}, "output_shaft_rotates", "GS_E_OPTION"),
     ({"friction_model": "magic"}, "friction_model", "GS_E_OPTION"),
     ({"loss_smoothing": "rough"}, "loss_smoothing", "GS_E_OPTION"),
@@ -157,6 +158,8 @@ RIG_CASES = [
     ("rack_pinion", {"contact_substeps": 65}, "contact_substeps", "GS_E_SUBSTEPS"),
     ("simple_gear", {"dt": 0.0}, "dt", "GS_E_STEP_SIZE"),
     ("rack_pinion", {"dt": NAN}, "dt", "GS_E_STEP_SIZE"),
+    # positive but subnormal: its reciprocal overflows a double
+    ("simple_gear", {"dt": 1e-310}, "dt", "GS_E_MAGNITUDE"),
     ("simple_gear", {"ambient_temperature": 0.0}, "ambient_temperature", None),
 ]
 
