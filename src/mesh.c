@@ -83,6 +83,16 @@ gs_status gs_mesh_set_thermal(gs_mesh_ *m, gs_real thermal_mass, gs_real initial
     return GS_OK;
 }
 
+void gs_mesh_set_temperature_table(gs_mesh_ *m, const gs_real *temperature, const gs_real *eta,
+                                   int n)
+{
+    m->eta_of_T.n = n;
+    for (int i = 0; i < n; ++i) {
+        m->eta_of_T.x[i] = temperature[i];
+        m->eta_of_T.y[i] = eta[i];
+    }
+}
+
 void gs_mesh_reset(gs_mesh_ *m)
 {
     m->temperature = m->initial_temperature;

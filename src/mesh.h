@@ -23,6 +23,9 @@ gs_status gs_mesh_set_backlash(gs_mesh_ *m, const gs_backlash_params *p, gs_real
 gs_status gs_mesh_set_thermal(gs_mesh_ *m, gs_real thermal_mass, gs_real initial_temperature,
                               gs_error *err);
 void gs_mesh_reset(gs_mesh_ *m);
+/* Copies a validated temperature -> efficiency table into the mesh. */
+void gs_mesh_set_temperature_table(gs_mesh_ *m, const gs_real *temperature, const gs_real *eta,
+                                   int n);
 
 /* Meshing loss (mesh_loss.c). */
 void gs_mesh_loss_prepare(const gs_mesh_ *m, gs_real temperature, gs_loss_ctx_ *ctx);

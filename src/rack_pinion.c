@@ -91,11 +91,8 @@ gs_status gs_rack_pinion_mesh(gs_mesh_ *mesh, const gs_rack_pinion_params *p, gs
         }
         break;
     case GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY:
-        if ((s = gs_check_breakpoints(err, p->temperature_vector_K, p->temperature_count, 0,
-                                      "temperature_vector")) != GS_OK ||
-            (s = gs_check_efficiencies(err, p->efficiency_vector, p->temperature_count,
-                                       p->temperature_count, "efficiency_vector")) != GS_OK ||
-            (s = gs_check_invertible(err, p->power_threshold_W, "power_threshold")) != GS_OK) {
+        if ((s = gs_check_temperature_efficiency(err, p->temperature_vector_K, p->efficiency_vector,
+                                                 p->temperature_count, p->power_threshold_W)) != GS_OK) {
             return s;
         }
         break;
@@ -127,11 +124,8 @@ gs_status gs_rack_pinion_mesh(gs_mesh_ *mesh, const gs_rack_pinion_params *p, gs
     m.inv_power_threshold = GS_R(1.0) / p->power_threshold_W;
     m.base_load_scale = radius;
     if (p->friction_model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY) {
-        m.eta_of_T.n = p->temperature_count;
-        for (int i = 0; i < p->temperature_count; ++i) {
-            m.eta_of_T.x[i] = p->temperature_vector_K[i];
-            m.eta_of_T.y[i] = p->efficiency_vector[i];
-        }
+        gs_mesh_set_temperature_table(&m, p->temperature_vector_K, p->efficiency_vector,
+                                      p->temperature_count);
     }
     if ((s = gs_mesh_set_thermal(&m, p->thermal_mass_J_K, p->initial_temperature_K, err)) != GS_OK ||
         (s = gs_mesh_set_backlash(&m, &p->backlash, radius, GS_R(1.0), err)) != GS_OK) {

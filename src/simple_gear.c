@@ -98,13 +98,8 @@ static gs_status check_friction(const gs_simple_gear_params *p, gs_error *err)
         break;
     }
     case GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY:
-        if ((s = gs_check_breakpoints(err, p->temperature_vector_K, p->temperature_count, 0,
-                                      "temperature_vector")) != GS_OK ||
-            (s = gs_check_efficiencies(err, p->efficiency_vector, p->temperature_count,
-                                       p->temperature_count, "efficiency_vector")) != GS_OK) {
-            return s;
-        }
-        s = gs_check_invertible(err, p->power_threshold_W, "power_threshold");
+        s = gs_check_temperature_efficiency(err, p->temperature_vector_K, p->efficiency_vector,
+                                            p->temperature_count, p->power_threshold_W);
         break;
     case GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY:
         if ((s = gs_check_breakpoints(err, p->temperature_vector_K, p->temperature_count, 0,
@@ -181,11 +176,8 @@ gs_status gs_simple_gear_mesh(gs_mesh_ *mesh, const gs_simple_gear_params *p, gs
         m.inv_speed_threshold = GS_R(1.0) / p->speed_threshold_rad_s;
     }
     if (p->friction_model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY) {
-        m.eta_of_T.n = p->temperature_count;
-        for (int i = 0; i < p->temperature_count; ++i) {
-            m.eta_of_T.x[i] = p->temperature_vector_K[i];
-            m.eta_of_T.y[i] = p->efficiency_vector[i];
-        }
+        gs_mesh_set_temperature_table(&m, p->temperature_vector_K, p->efficiency_vector,
+                                      p->temperature_count);
     }
     if (p->friction_model == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY) {
         m.eta_of_T_load.nx = p->temperature_count;

@@ -76,6 +76,17 @@ gs_status gs_check_breakpoints(gs_error *err, const gs_real *x, int n, int nonne
     return GS_OK;
 }
 
+gs_status gs_check_temperature_efficiency(gs_error *err, const gs_real *temperature,
+                                          const gs_real *eta, int n, gs_real power_threshold)
+{
+    gs_status s;
+    if ((s = gs_check_breakpoints(err, temperature, n, 0, "temperature_vector")) != GS_OK ||
+        (s = gs_check_efficiencies(err, eta, n, n, "efficiency_vector")) != GS_OK) {
+        return s;
+    }
+    return gs_check_invertible(err, power_threshold, "power_threshold");
+}
+
 gs_status gs_check_efficiencies(gs_error *err, const gs_real *eta, int n, int expected_n,
                                 const char *parameter)
 {
