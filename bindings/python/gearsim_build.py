@@ -5,7 +5,8 @@ Enum values and ``#define`` constants are written ``...`` so that the C compiler
 fills them in from ``include/gearsim``; structs end with ``...;`` so that their
 layout comes from the compiler as well. The sources of ``src/`` are compiled
 into the extension (double precision: ``GS_SINGLE_PRECISION`` is not defined),
-so there is one copy of the physics, the C one.
+so there is one copy of the physics, the C one. ``SHIM`` is the bindings' own
+C (no physics): the per-step entry point of ``Rig.step``.
 
 Used by ``setup.py`` (``cffi_modules``); can also be run directly to build the
 extension in place: ``python bindings/python/gearsim_build.py``.
@@ -304,6 +305,49 @@ gs_status gs_rig_init_rack(gs_rig *rig, const gs_rack_pinion_params *rack,
 void gs_rig_reset(gs_rig *rig);
 void gs_rig_step(gs_rig *rig, const gs_rig_input *in, gs_rig_output *out);
 void gs_rig_run(gs_rig *rig, size_t n, const gs_rig_input *in, gs_rig_output *out);
+
+/* ---- the bindings' own C (SHIM below), for Rig.step */
+typedef struct {
+    gs_rig_output out;
+    gs_rig *rig;
+    ...;
+} gspy_stepper;
+
+int gspy_rig_step(gspy_stepper *s, double base_speed, double base_torque, double load,
+                  double ambient_temperature, double measured_temperature);
+"""
+
+# C compiled into the extension beside the core (not part of the C API): a
+# per-step entry point for Rig.step. One cffi call with the five inputs by value
+# replaces writing them into a gs_rig_input from Python, checking them and
+# calling gs_rig_step with three pointers (which cffi converts one by one).
+SHIM = r"""
+#include <math.h>
+
+/* The output of the last step of one rig (first: Rig.step reads it from the
+   start of the struct), and that rig (owned by the caller). */
+typedef struct {
+    gs_rig_output out;
+    gs_rig *rig;
+} gspy_stepper;
+
+/* One gs_rig_step with these inputs into s->out; returns 0. Returns 1 without
+   stepping when an input is not finite (Rig.step then finds and names it). */
+static int gspy_rig_step(gspy_stepper *s, double base_speed, double base_torque, double load,
+                         double ambient_temperature, double measured_temperature)
+{
+    gs_rig_input in = {0};
+    if (!(isfinite(base_speed) && isfinite(base_torque) && isfinite(load) &&
+          isfinite(ambient_temperature) && isfinite(measured_temperature)))
+        return 1;
+    in.base_speed_rad_s = base_speed;
+    in.base_torque_Nm = base_torque;
+    in.load = load;
+    in.ambient_temperature_K = ambient_temperature;
+    in.measured_temperature_K = measured_temperature;
+    gs_rig_step(s->rig, &in, &s->out);
+    return 0;
+}
 """
 
 
@@ -330,7 +374,7 @@ def make_builder(absolute: bool = False) -> FFI:
     builder.cdef(CDEF)
     builder.set_source(
         "gearsim._gearsim",
-        '#include "gearsim/gearsim.h"\n',
+        '#include "gearsim/gearsim.h"\n' + SHIM,
         sources=[_path(p, absolute) for p in sources],
         include_dirs=[_path(INCLUDE_DIR, absolute), _path(SRC_DIR, absolute)],
         libraries=[] if sys.platform == "win32" else ["m"],

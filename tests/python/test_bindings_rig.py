@@ -220,3 +220,141 @@ def test_model_rig_keeps_the_model():
     assert rig.params["rack_mass"] == 3.0
     torque_rig = model.rig(base_drive="torque", base_inertia=1e-3)
     assert torque_rig.base_drive == "torque"
+
+
+# -- Rig.step: the C per-step entry point (gspy_rig_step) and its slow path ------
+
+_STEP_INPUTS = (
+    "base_speed",
+    "base_torque",
+    "load",
+    "ambient_temperature",
+    "measured_temperature",
+)
+
+
+def _step_rigs():
+    """Speed- and torque-driven rigs of both blocks, with and without temperature input."""
+    return [
+        gearsim.GearRig(friction_model="constant_efficiency", backlash_enabled=True),
+        gearsim.GearRig(
+            friction_model="temperature_dependent_efficiency",
+            thermal_resistance=2.0,
+            ambient_temperature=290.0,
+        ),
+        gearsim.GearRig(
+            friction_model="temperature_dependent_efficiency",
+            temperature_input=True,
+            base_drive="torque",
+            base_inertia=0.01,
+        ),
+        gearsim.RackRig(rack_mass=2.0, base_drive="torque", base_inertia=1e-3),
+        gearsim.RackRig(friction_model="constant_efficiency", temperature_input=True),
+    ]
+
+
+_VALID_INPUTS = {
+    "base_speed": 3.0,
+    "base_torque": 0.2,
+    "load": -0.5,
+    "ambient_temperature": 295.0,
+    "measured_temperature": 310.0,
+}
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf, np.float64("nan"), float("-inf")])
+@pytest.mark.parametrize("name", _STEP_INPUTS)
+def test_step_rejects_non_finite_inputs_naming_them(name, bad):
+    for rig in _step_rigs():
+        rig.step(**_VALID_INPUTS)
+        before = rig.snapshot().state
+        with pytest.raises(gearsim.InputError, match="finite") as e:
+            rig.step(**{**_VALID_INPUTS, name: bad})
+        assert e.value.parameter == name
+        assert rig.snapshot().state == before  # a rejected call does not step
+
+
+def test_step_names_the_first_bad_input_and_rejects_non_numbers():
+    rig = gearsim.GearRig(temperature_input=True)
+    with pytest.raises(gearsim.InputError) as e:
+        rig.step(base_speed=1.0, load=np.nan, measured_temperature=np.inf)
+    assert e.value.parameter == "load"
+    for value in (None, "fast", object(), [1.0]):
+        with pytest.raises(gearsim.InputError, match="number") as e:
+            rig.step(base_speed=1.0, load=value, measured_temperature=300.0)
+        assert e.value.parameter == "load"
+    with pytest.raises(gearsim.InputError) as e:
+        rig.step(base_speed=1.0, ambient_temperature="warm", measured_temperature=300.0)
+    assert e.value.parameter == "ambient_temperature"
+    # the required inputs are still named when missing
+    with pytest.raises(gearsim.InputError) as e:
+        rig.step(base_speed=1.0)
+    assert e.value.parameter == "measured_temperature"
+
+
+def test_step_accepts_numbers_of_other_types():
+    a = gearsim.GearRig(friction_model="constant_efficiency")
+    b = gearsim.GearRig(friction_model="constant_efficiency")
+    for x, y in ((2, 1), (np.float32(2.5), np.int64(-1)), (np.float64(0.25), True)):
+        one = a.step(base_speed=x, load=y)
+        two = b.step(base_speed=float(x), load=float(y))
+        assert one.to_dict() == two.to_dict()
+    # finite inputs whose sum overflows are finite inputs
+    a.step(base_speed=1e308, load=1e308)
+
+
+def test_step_sequence_equals_gs_rig_run():
+    """Rig.step over a short sequence, with inputs given or defaulted, is bit for
+    bit gs_rig_run (Rig.run_array) on the same inputs."""
+    n = 40
+    w = _speed(n)
+    tau = np.linspace(-0.3, 0.5, n)
+    load = np.linspace(1.0, -1.0, n)
+    amb = np.linspace(280.0, 320.0, n)
+    meas = np.linspace(300.0, 330.0, n)
+    for i, (stepped, batch) in enumerate(zip(_step_rigs(), _step_rigs(), strict=True)):
+        speed_driven = stepped.base_drive == "speed"
+        rows = []
+        columns = np.zeros((n, 5))
+        for k in range(n):
+            kw = {"base_speed": w[k]} if speed_driven else {"base_torque": tau[k]}
+            kw["load"] = load[k]
+            if k % 2:  # every other step leaves the optional inputs to their defaults
+                kw["ambient_temperature"] = amb[k]
+                if not stepped.temperature_input:
+                    kw["measured_temperature"] = meas[k]
+            if stepped.temperature_input:
+                kw["measured_temperature"] = meas[k]
+            out = stepped.step(**kw)
+            assert type(out) is gearsim.RigResult and len(out) == 1
+            rows.append([out[name] for name in gearsim.OUTPUT_NAMES])
+            given = {
+                "base_speed": 0.0,
+                "base_torque": 0.0,
+                "ambient_temperature": batch.ambient_temperature,
+                **kw,
+            }
+            given.setdefault("measured_temperature", given["ambient_temperature"])
+            columns[k] = [given[name] for name in gearsim.INPUT_NAMES]
+        ref = batch.run_array(columns)
+        assert np.array_equal(np.array(rows).view(np.uint64), ref.view(np.uint64)), i
+
+
+def test_step_after_copy_restore_and_reset():
+    rig = gearsim.GearRig(backlash_enabled=True, friction_model="constant_efficiency")
+    w = _speed(60)
+    for k in range(30):
+        rig.step(base_speed=w[k])
+    clone = rig.copy()
+    snap = rig.snapshot()
+    tail = [rig.step(base_speed=w[k]).to_dict() for k in range(30, 60)]
+    assert [clone.step(base_speed=w[k]).to_dict() for k in range(30, 60)] == tail
+    rig.restore(snap)
+    assert [rig.step(base_speed=w[k]).to_dict() for k in range(30, 60)] == tail
+    rig.reset()
+    fresh = gearsim.GearRig(backlash_enabled=True, friction_model="constant_efficiency")
+    assert rig.step(base_speed=w[0]).to_dict() == fresh.step(base_speed=w[0]).to_dict()
+    # the clone steps its own C state: stepping it leaves the original alone
+    before = rig.snapshot().state
+    clone.step(base_speed=1.0)
+    assert rig.snapshot().state == before

@@ -9,6 +9,7 @@ arrays (gs_rig_run) and is bit-identical to the same number of steps.
 from __future__ import annotations
 
 import math
+import struct
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -236,10 +237,7 @@ class Rig:
         self._given = given
         self._full = full
         self._rig = rig
-        self._in = ffi.new("gs_rig_input *")
-        self._out = ffi.new("gs_rig_output *")
-        self._in_doubles = _doubles(self._in)
-        self._out_doubles = _doubles(self._out)
+        self._stepper, self._step_out = _stepper(rig)
         self._ambient = float(full["ambient_temperature"])
         self._speed_driven = full["base_drive"] == "speed"
         self._key = (
@@ -331,10 +329,7 @@ class Rig:
         new.__dict__.update(self.__dict__)
         new._rig = ffi.new("gs_rig *")
         ffi.memmove(new._rig, self._rig, ffi.sizeof("gs_rig"))
-        new._in = ffi.new("gs_rig_input *")
-        new._out = ffi.new("gs_rig_output *")
-        new._in_doubles = _doubles(new._in)
-        new._out_doubles = _doubles(new._out)
+        new._stepper, new._step_out = _stepper(new._rig)
         return new
 
     # -- stepping --------------------------------------------------------------
@@ -372,24 +367,20 @@ class Rig:
                     parameter="measured_temperature",
                 )
             measured_temperature = ambient
-        # Fast path: write the five doubles through a memoryview and test their
-        # sum; only a failure looks at each value (which names the bad input).
-        c_in = self._in_doubles
+        # Fast path: one C call converts the five values to doubles, checks that
+        # they are finite and steps (gspy_rig_step, gearsim_build.py); only a
+        # failure looks at each value (which names the bad input).
         try:
-            c_in[_C_BASE_SPEED] = base_speed
-            c_in[_C_BASE_TORQUE] = base_torque
-            c_in[_C_LOAD] = load
-            c_in[_C_AMBIENT] = ambient
-            c_in[_C_MEASURED] = measured_temperature
-            ok = math.isfinite(base_speed + base_torque + load + ambient + measured_temperature)
+            bad = _step_c(
+                self._stepper, base_speed, base_torque, load, ambient, measured_temperature
+            )
         except (TypeError, ValueError, OverflowError):
-            ok = False
-        if not ok:
-            given = (base_speed, base_torque, load, ambient, measured_temperature)
-            for name, value in zip(_STEP_INPUTS, given, strict=True):
-                c_in[_IN_COL[name]] = _finite(name, value)
-        lib.gs_rig_step(self._rig, self._in, self._out)
-        return tuple.__new__(RigResult, self._out_doubles.tolist())
+            bad = 1
+        if bad:
+            _step_checked(
+                self._stepper, base_speed, base_torque, load, ambient, measured_temperature
+            )
+        return _new_tuple(RigResult, _unpack_out(self._step_out))
 
     def inputs(
         self,
@@ -508,14 +499,31 @@ class Rig:
         return out
 
 
-# Rig.step writes gs_rig_input and reads gs_rig_output (all-double structs)
-# through memoryviews of doubles, in column order.
+# Rig.step passes the five inputs by value to gspy_rig_step (the bindings' C
+# shim, gearsim_build.py), which steps into the gs_rig_output of a per-rig
+# gspy_stepper; the result is read from the stepper's first bytes (out is its
+# first member) in one struct.unpack_from (all-double struct, fields in column
+# order = FIELDS order).
 _STEP_INPUTS = ("base_speed", "base_torque", "load", "ambient_temperature", "measured_temperature")
-_C_BASE_SPEED, _C_BASE_TORQUE, _C_LOAD, _C_AMBIENT, _C_MEASURED = (_IN_COL[n] for n in _STEP_INPUTS)
+_step_c = lib.gspy_rig_step
+_unpack_out = struct.Struct(f"@{lib.GS_RIG_OUTPUT_FIELDS}d").unpack_from
+_new_tuple = tuple.__new__
 
 
-def _doubles(struct_ptr: Any) -> memoryview:
-    return memoryview(ffi.buffer(struct_ptr)).cast("B").cast("d")
+def _stepper(rig: Any) -> tuple[Any, Any]:
+    """A gspy_stepper for the gs_rig * rig (which the caller keeps alive), and a
+    buffer over it whose first bytes are its gs_rig_output."""
+    stepper = ffi.new("gspy_stepper *")
+    stepper.rig = rig
+    return stepper, ffi.buffer(stepper)
+
+
+def _step_checked(stepper: Any, *values: Any) -> None:
+    """Rig.step's slow path: convert and check each input in order, raising an
+    InputError that names the first bad one; step when all are good."""
+    good = [_finite(name, value) for name, value in zip(_STEP_INPUTS, values, strict=True)]
+    if _step_c(stepper, *good):  # pragma: no cover - _finite let only finite floats through
+        raise InputError("non-finite input", parameter=None)
 
 
 def _finite(name: str, value: Any) -> float:
