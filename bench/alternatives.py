@@ -13,13 +13,22 @@ The same equations as the C rig (docs/physics.md), written plainly in Python:
   possible because the rigid speed-driven rig with constant efficiency has no
   state besides the last input speed; with a thermal model or backlash it
   would need a loop again.
+- ``python_loop_full``: the full Simple Gear rig of the C configuration
+  ``sg_full`` (backlash with the smooth hard stop solved by backward Euler
+  and a bracketed Newton iteration in contact sub-steps, the temperature x
+  load efficiency table, the thermal mass with a heat path to ambient,
+  viscous losses, the load's Coulomb friction), one Python step per sample
+  with the algorithm of src/rig.c and src/hard_stop.c. This is what a user
+  who needs backlash or heating writes instead of gearsim: nothing here can
+  be vectorised, because every step depends on the last one.
 - ``backlash_ode``: the Simple Gear with backlash (smooth hard stop, eq. 4.5,
   no-pull clip) between the speed-driven base and the follower inertia, as an
   ODE in (x, omega_F) for ``scipy.integrate.solve_ivp``. The held base speed
   is the same piecewise-linear ramp between samples that the C rig uses.
 
-All take the parameters as a plain dict (``GEAR_PARAMS`` below), so that the
-benchmark builds the gearsim model from the same numbers.
+All take the parameters as a plain dict (``GEAR_PARAMS`` or ``FULL_PARAMS``
+below), so that the benchmark builds the gearsim model from the same numbers
+(``full_gearsim_params`` for the full rig).
 """
 
 from __future__ import annotations
@@ -48,6 +57,78 @@ GEAR_PARAMS: dict[str, float] = {
     "stiffness": 1e6,
     "damping": 1e3,
 }
+
+#: The full Simple Gear rig (= C configuration ``sg_full`` of
+#: bench/bench_common.h): the defaults of docs/physics.md section 9 except
+#: the friction model, initial temperature, viscous coefficients, backlash,
+#: heat path and load Coulomb friction, which sg_full sets. SI units.
+FULL_PARAMS: dict[str, Any] = {
+    # gear: teeth ratio g = N_F/N_B, opposite rotation (s = -1)
+    "teeth_ratio": 2.0,
+    "direction": -1.0,
+    # temperature x load efficiency table (eqs. 2.5, 2.7): rows at the
+    # temperatures (K), columns at the base-referred load |T_F|/g (N*m)
+    "temperature_vector": [280.0, 300.0, 320.0],
+    "load_vector": [0.0, 50.0, 100.0],
+    "efficiency_matrix": [[0.90, 0.95, 0.96], [0.85, 0.90, 0.92], [0.80, 0.85, 0.88]],
+    "speed_threshold": 0.01,  # omega_th of the tanh speed smoothing, rad/s
+    # viscous bearing losses [mu_B, mu_F], N*m/(rad/s)
+    "mu_base": 0.002,
+    "mu_follower": 0.004,
+    # backlash: smooth hard stop (eq. 4.5) with the no-pull clip, teeth centred
+    "linear_backlash": 1e-3,  # b, total free travel at the pitch line, m
+    "base_radius": 0.1,  # r_B, m (r_F = g*r_B)
+    "transition_region": 1e-4,  # d, m
+    "stiffness": 1e6,  # K, N/m
+    "damping": 1e3,  # D, N*s/m
+    "contact_substeps": 0,  # 0: the rig's automatic count (h*omega_n <= 0.5)
+    # thermal mass (eq. 5.1) with a heat path to ambient
+    "thermal_mass": 50.0,  # C, J/K
+    "initial_temperature": 295.0,  # K
+    "thermal_resistance": 2.0,  # R_th, K/W
+    "ambient_temperature": 293.15,  # K
+    # rig: speed-driven base, follower inertia, Coulomb friction on the load
+    "follower_inertia": 0.05,  # J_F, kg*m^2
+    "load_coulomb_friction": 0.05,  # tau_C, N*m
+    "load_coulomb_speed_threshold": 1e-3,  # rad/s
+    "dt": 1e-3,  # s
+}
+
+
+def full_gearsim_params(p: dict[str, Any] = FULL_PARAMS) -> tuple[dict, dict]:
+    """gearsim's block and rig parameters for the rig of python_loop_full
+    (``gearsim.Model(block="simple_gear", block_params=..., rig_params=...)``)."""
+    block = {
+        "teeth_ratio": p["teeth_ratio"],
+        "output_shaft_rotates": "opposite" if p["direction"] < 0 else "same",
+        "friction_model": "temperature_load_dependent_efficiency",
+        "temperature_vector": list(p["temperature_vector"]),
+        "load_vector": list(p["load_vector"]),
+        "efficiency_matrix": [list(row) for row in p["efficiency_matrix"]],
+        "speed_threshold": p["speed_threshold"],
+        "viscous_coefficients": [p["mu_base"], p["mu_follower"]],
+        "backlash_enabled": True,
+        "hard_stop_model": "smooth",
+        "linear_backlash": p["linear_backlash"],
+        "base_radius": p["base_radius"],
+        "transition_region": p["transition_region"],
+        "stiffness": p["stiffness"],
+        "damping": p["damping"],
+        "initial_backlash_position": 0.0,
+        "contact_no_pull": True,
+        "contact_lock_enabled": False,
+        "thermal_mass": p["thermal_mass"],
+        "initial_temperature": p["initial_temperature"],
+    }
+    rig = {
+        "follower_inertia": p["follower_inertia"],
+        "load_coulomb_friction": p["load_coulomb_friction"],
+        "load_coulomb_speed_threshold": p["load_coulomb_speed_threshold"],
+        "thermal_resistance": p["thermal_resistance"],
+        "ambient_temperature": p["ambient_temperature"],
+        "contact_substeps": p["contact_substeps"],
+    }
+    return block, rig
 
 
 def scenario(n: int, dt: float = 1e-3) -> tuple[np.ndarray, np.ndarray]:
@@ -203,4 +284,209 @@ def backlash_ode(
         "nfev": int(sol.nfev),
         "status": int(sol.status),
         "message": str(sol.message),
+    }
+
+
+def python_loop_full(
+    base_speed: Any,
+    load: Any,
+    p: dict[str, Any] = FULL_PARAMS,
+    newton_iterations: int = 12,
+    newton_tolerance: float = 1e-13,
+) -> dict[str, Any]:
+    """The full Simple Gear rig (sg_full), one Python step per sample.
+
+    Speed-driven base, follower inertia J_F, and between them the gear with
+    backlash. Each step of dt is cut into n sub-steps of h = dt/n (n as the
+    C rig picks it). In each sub-step:
+
+    1. explicit: the meshing loss tau_mesh of eq. 2.7 on the last contact
+       force (T_F0 = -s*r_F*f, eq. 4.6), with the efficiency from the
+       temperature x load table, and the load's Coulomb friction;
+    2. the follower's free motion over h (viscous term implicit), then the
+       contact by backward Euler: the relative tooth speed u at the end of
+       the sub-step solves Phi(u) = u - u_free + c*f(x + h*u, u) = 0 with
+       c = h*r_F^2/(J_F + h*mu_F), by Newton's method kept inside the
+       bracket [u_free, u_free - c*f0] (bisection where a step would leave
+       it), stopped once a step is below newton_tolerance of the bracket
+       scale |u_free| + c*|f0|, at most newton_iterations steps;
+    3. if the held loss would reverse the follower, the sub-step again
+       without it; then the speeds, x and the sums of the outputs.
+
+    After the sub-steps, the thermal mass: C*dT/dt = P_loss + (T_amb - T)/R_th
+    (ambient term implicit). Returns lists of the base torque (N*m, the mean
+    over the sub-steps), follower speed (rad/s), temperature (K) and backlash
+    position (m) at each sample, and the sub-step count.
+    """
+    tanh = math.tanh
+    # -- constants (SI) --------------------------------------------------------
+    g = p["teeth_ratio"]
+    s = p["direction"]
+    inv_g = 1.0 / g
+    dt = p["dt"]
+    r_b = p["base_radius"]  # m
+    r_f = g * r_b  # m
+    sr_f = s * r_f
+    mu_b = p["mu_base"]  # N*m/(rad/s)
+    mu_f = p["mu_follower"]
+    j_f = p["follower_inertia"]  # kg*m^2
+    half_gap = 0.5 * p["linear_backlash"]  # m
+    inv_d = 1.0 / p["transition_region"]  # 1/m
+    k_c = p["stiffness"]  # N/m
+    d_c = p["damping"]  # N*s/m
+    temps = [float(v) for v in p["temperature_vector"]]  # K
+    loads = [float(v) for v in p["load_vector"]]  # N*m at the base
+    columns = [[float(row[j]) for row in p["efficiency_matrix"]] for j in range(len(loads))]
+    k_mesh = 4.0 / p["speed_threshold"]  # tanh(4*omega_F/omega_th)
+    tau_c = p["load_coulomb_friction"]  # N*m
+    k_coulomb = 4.0 / p["load_coulomb_speed_threshold"]
+    a_th = dt / p["thermal_mass"]  # K/J
+    g_th = 1.0 / p["thermal_resistance"]  # W/K
+    t_amb = p["ambient_temperature"]  # K
+    # sub-steps: the smallest n with (h*omega_n)^2 <= 0.25, at most 16, where
+    # omega_n^2 = K*r_F^2/(J_F + dt*mu_F) (the C rig's automatic count)
+    n = int(p["contact_substeps"])
+    if n <= 0:
+        k_over_m = k_c * (r_f * r_f / (j_f + dt * mu_f))
+        n = 1
+        while n < 16 and not ((dt / n) * (dt / n) * k_over_m <= 0.25):
+            n += 1
+    h = dt / n  # s
+    jh_f = j_f + h * mu_f  # follower inertia with the implicit viscous term
+    c = h * (r_f * r_f / jh_f)  # h/m_eff at the pitch line, s/kg
+
+    def interp(xs: list[float], ys: list[float], at: float) -> float:
+        """Linear interpolation; the end values hold outside the table."""
+        if not at > xs[0]:
+            return ys[0]
+        if not at < xs[-1]:
+            return ys[-1]
+        i = 1
+        while not at < xs[i]:
+            i += 1
+        return ys[i - 1] + (at - xs[i - 1]) / (xs[i] - xs[i - 1]) * (ys[i] - ys[i - 1])
+
+    def contact(x: float, u: float) -> tuple[float, float, float]:
+        """Smooth hard stop (eq. 4.5) with the no-pull clip at x (m) and
+        v = u (m/s): the force f (N), df/du along x = x0 + h*u, and the
+        spring part of f."""
+        if x > half_gap:
+            delta = x - half_gap
+            side = 1.0
+        elif x < -half_gap:
+            delta = x + half_gap
+            side = -1.0
+        else:
+            return 0.0, 0.0, 0.0  # teeth apart
+        xi = abs(delta) * inv_d
+        if xi < 1.0:  # cubic step S = xi^2 (3 - 2 xi) through the transition region
+            scale = xi * xi * (3.0 - 2.0 * xi)
+            dscale = 6.0 * xi * (1.0 - xi) * inv_d * h * side
+        else:
+            scale = 1.0
+            dscale = 0.0
+        raw = k_c * delta + d_c * u
+        f = scale * raw
+        if side * f < 0.0:
+            return 0.0, 0.0, scale * k_c * delta  # no pull
+        return f, dscale * raw + scale * (k_c * h + d_c), scale * k_c * delta
+
+    def solve_contact(x: float, u_free: float) -> tuple[float, float, float]:
+        """Backward Euler over h: u = u_free - c*f(x + h*u, u). Returns u
+        (m/s), the force of the impulse balance (N) and its spring part."""
+        f, dfdu, f_spring = contact(x + h * u_free, u_free)
+        if f == 0.0:
+            return u_free, 0.0, f_spring
+        # Phi(u) = u - u_free + c*f(u) increases; its root lies in [lo, hi]
+        lo, hi = (u_free - c * f, u_free) if f > 0.0 else (u_free, u_free - c * f)
+        tolerance = newton_tolerance * (abs(u_free) + c * abs(f))
+        u = u_free
+        for _ in range(newton_iterations):
+            phi = u - u_free + c * f
+            if phi > 0.0:
+                hi = u
+            elif phi < 0.0:
+                lo = u
+            else:
+                break  # exact root
+            slope = 1.0 + c * dfdu
+            step_to = u - phi / slope if slope > 0.0 else lo
+            converged = abs(step_to - u) <= tolerance and lo <= step_to <= hi
+            if not converged and not lo < step_to < hi:
+                step_to = 0.5 * (lo + hi)  # bisect where Newton leaves the bracket
+            u = step_to
+            f, dfdu, f_spring = contact(x + h * u, u)
+            if converged:
+                break
+        force = (u_free - u) / c
+        if (force - f_spring) * u < 0.0 and abs(x) <= half_gap:
+            # first contact on a jump of the law: the root is the stop's edge
+            edge = half_gap if x + h * u > 0.0 else -half_gap
+            u_edge = (edge - x) / h
+            if lo <= u_edge <= hi:
+                u = u_edge
+                force = (u_free - u) / c
+                f_spring = 0.0
+        return u, force, f_spring
+
+    ws = base_speed.tolist() if hasattr(base_speed, "tolist") else list(base_speed)
+    tau_loads = load.tolist() if hasattr(load, "tolist") else list(load)
+    n_samples = len(ws)
+    out_tau_b = [0.0] * n_samples
+    out_w_f = [0.0] * n_samples
+    out_temp = [0.0] * n_samples
+    out_x = [0.0] * n_samples
+    # -- state: the first sample sets the speeds, the teeth moving together ----
+    w_b = ws[0] if ws else 0.0  # base speed, rad/s
+    w_f = s * w_b / g  # follower speed, rad/s
+    x = 0.0  # backlash position, m (centred)
+    f_last = 0.0  # contact force of the last sub-step, N
+    temp = p["initial_temperature"]  # K
+    for i in range(n_samples):
+        w_in = ws[i]
+        tau_load = tau_loads[i]
+        # the table at this step's temperature: efficiency over the base load
+        eta_of_load = [interp(temps, col, temp) for col in columns]
+        w_b_start = w_b
+        sum_tau_b = 0.0
+        sum_loss = 0.0
+        for k in range(n):
+            # explicit: meshing loss (eq. 2.7) on T_F0 = -s*r_F*f, load friction
+            t_f0 = -sr_f * f_last
+            eta = interp(loads, eta_of_load, abs(t_f0) * inv_g)
+            tau_mesh = (1.0 / eta - 1.0) * abs(t_f0) * tanh(k_mesh * w_f)
+            external = tau_load - tau_c * tanh(k_coulomb * w_f)
+            # the held base speed ramps linearly from the last sample to this one
+            w_b_new = w_b_start + (w_in - w_b_start) * (k + 1) / n
+            # free motion of the follower over h, then the contact
+            w_f_free = (j_f * w_f + h * (external - tau_mesh)) / jh_f
+            u, f, f_spring = solve_contact(x, r_b * w_b_new - sr_f * w_f_free)
+            w_f_new = w_f_free + h * sr_f * f / jh_f
+            if tau_mesh * w_f_new < 0.0:
+                # the held loss would reverse the follower: this sub-step without it
+                tau_mesh = 0.0
+                w_f_free = (j_f * w_f + h * external) / jh_f
+                u, f, f_spring = solve_contact(x, r_b * w_b_new - sr_f * w_f_free)
+                w_f_new = w_f_free + h * sr_f * f / jh_f
+            w_b = w_b_new
+            w_f = w_f_new
+            x += h * (r_b * w_b - sr_f * w_f)  # eq. 4.2 at the end speeds
+            f_last = f
+            sum_tau_b += r_b * f + mu_b * w_b  # tau_B = r_B*f + mu_B*omega_B
+            # loss: mesh + viscous + contact damping (eq. 5.2)
+            sum_loss += (
+                tau_mesh * w_f + mu_b * w_b * w_b + mu_f * w_f * w_f + (f - f_spring) * u
+            )
+        # thermal mass (eq. 5.1), Q_H = (T_amb - T)/R_th taken implicitly
+        temp = (temp + a_th * (sum_loss / n + g_th * t_amb)) / (1.0 + a_th * g_th)
+        out_tau_b[i] = sum_tau_b / n
+        out_w_f[i] = w_f
+        out_temp[i] = temp
+        out_x[i] = x
+    return {
+        "base_torque": out_tau_b,
+        "driven_speed": out_w_f,
+        "temperature": out_temp,
+        "backlash_position": out_x,
+        "substeps": n,
     }

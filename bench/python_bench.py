@@ -8,11 +8,13 @@ benchmark):
   Rig.run_array into a preallocated output, for a few rigs; median of several
   repeats after a warm-up, in steps per second;
 - per step: Rig.step, median of the mean call time over blocks of calls;
-- the alternatives (bench/alternatives.py): the same rig stepped in a Python
-  loop, the same rig as vectorised numpy, and the backlash rig as an ODE for
+- the alternatives (bench/alternatives.py): the rigid rig stepped in a
+  Python loop and as vectorised numpy, the full Simple Gear rig (sg_full)
+  stepped in a Python loop, and the backlash rig as an ODE for
   scipy.integrate.solve_ivp; their results are compared with gearsim's (max
-  abs difference of the base torque, RMS difference of the follower speed)
-  so that the ratios compare like with like.
+  abs difference of the base torque and the follower speed, RMS difference
+  of the follower speed for the ODE) so that the ratios compare like with
+  like.
 
 Prints a summary and writes every figure to --json. Never asserts a time.
 Usage: python_bench.py [--json FILE] [--quick]
@@ -56,20 +58,9 @@ BACKLASH_BLOCK = {
     "stiffness": P["stiffness"],
     "damping": P["damping"],
 }
-# The full Simple Gear rig (= C configuration sg_full).
-FULL_BLOCK = {
-    "friction_model": "temperature_load_dependent_efficiency",
-    "initial_temperature": 295.0,
-    "viscous_coefficients": [0.002, 0.004],
-    "backlash_enabled": True,
-    "hard_stop_model": "smooth",
-}
-FULL_RIG = {
-    "follower_inertia": 0.05,
-    "thermal_resistance": 2.0,
-    "load_coulomb_friction": 0.05,
-    "ambient_temperature": 293.15,
-}
+# The full Simple Gear rig (= C configuration sg_full), from the numbers of
+# the Python alternative (alternatives.FULL_PARAMS).
+FULL_BLOCK, FULL_RIG = alt.full_gearsim_params()
 RIG = {"follower_inertia": P["follower_inertia"]}
 
 
@@ -230,6 +221,46 @@ def bench_alternatives(gearsim: Any, n_loop: int, n_vec: int, repeats: int) -> d
     return res
 
 
+def bench_full_loop(gearsim: Any, n_loop: int, n_ref: int, repeats: int) -> dict:
+    """The full rig (sg_full) in a Python loop against gearsim's Rig.run on it."""
+    w, load = alt.scenario(n_ref)
+    rig = make_rig(gearsim, FULL_BLOCK, FULL_RIG)
+
+    def gs_run() -> None:
+        rig.reset()
+        rig.run(base_speed=w, load=load)
+
+    t_gs = median_time(gs_run, repeats)
+    wl, ll = w[:n_loop], load[:n_loop]
+    rig.reset()
+    ref = rig.run(base_speed=wl, load=ll)
+    loop = alt.python_loop_full(wl, ll)  # also the warm-up of the timing
+    t_loop = median_time(lambda: alt.python_loop_full(wl, ll), max(3, repeats // 2), warmup=0)
+    tau = np.asarray(loop["base_torque"])
+    w_f = np.asarray(loop["driven_speed"])
+    tau_peak = float(np.max(np.abs(ref.base_torque)))
+    w_f_peak = float(np.max(np.abs(ref.driven_speed)))
+    tau_diff = float(np.max(np.abs(tau - ref.base_torque)))
+    w_f_diff = float(np.max(np.abs(w_f - ref.driven_speed)))
+    return {
+        "config": "sg_full",
+        "samples": n_loop,
+        "substeps": loop["substeps"],
+        "gearsim_substeps": rig.substeps,
+        "ns_per_step": t_loop["median"] / n_loop * 1e9,
+        "cpu_ns_per_step": t_loop["cpu_median"] / n_loop * 1e9,
+        "gearsim_samples": n_ref,
+        "gearsim_run_ns_per_step": t_gs["median"] / n_ref * 1e9,
+        "gearsim_run_cpu_ns_per_step": t_gs["cpu_median"] / n_ref * 1e9,
+        "max_abs_diff_base_torque_Nm": tau_diff,
+        "max_abs_base_torque_Nm": tau_peak,
+        "rel_diff_base_torque": tau_diff / tau_peak,
+        "max_abs_diff_driven_speed_rad_s": w_f_diff,
+        "max_abs_driven_speed_rad_s": w_f_peak,
+        "rel_diff_driven_speed": w_f_diff / w_f_peak,
+    }
+
+
 def bench_ode(gearsim: Any, n: int, repeats: int) -> dict:
     try:
         import scipy
@@ -333,6 +364,19 @@ def main() -> int:
             f"max |diff| base torque {r['max_abs_diff_base_torque_Nm']:.2e} N*m "
             f"(of {r['max_abs_base_torque_Nm']:.2f})"
         )
+    a["python_loop_full"] = bench_full_loop(
+        gearsim, 4000 if quick else 20_000, 100_000 if quick else 1_000_000, 3 if quick else 7
+    )
+    r = a["python_loop_full"]
+    print(
+        f"python_loop_full : {r['ns_per_step']:8.1f} ns/step, "
+        f"{r['ns_per_step'] / r['gearsim_run_ns_per_step']:6.1f}x gearsim Rig.run sg_full "
+        f"({r['gearsim_run_ns_per_step']:.1f} ns/step; "
+        f"{r['cpu_ns_per_step'] / r['gearsim_run_cpu_ns_per_step']:.1f}x on CPU time); "
+        f"max |diff| base torque {r['rel_diff_base_torque']:.1e} of its peak "
+        f"{r['max_abs_base_torque_Nm']:.2f} N*m, follower speed "
+        f"{r['rel_diff_driven_speed']:.1e} of {r['max_abs_driven_speed_rad_s']:.2f} rad/s"
+    )
     res["ode"] = bench_ode(gearsim, 500 if quick else 2000, 3 if quick else 5)
     o = res["ode"]
     if o.get("available"):

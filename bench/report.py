@@ -184,7 +184,7 @@ ALTERNATIVES = (
 )
 
 
-def python_section(py: dict, c_step: dict | None) -> list[str]:
+def python_section(py: dict, c_step: dict | None, c_full: dict | None) -> list[str]:
     md = [
         f"### Python (Python {py['python']}, numpy {py['numpy']})",
         "",
@@ -231,6 +231,27 @@ def python_section(py: dict, c_step: dict | None) -> list[str]:
             f"| {label} | {r['samples']:.0e} | {r['ns_per_step']:.1f} | "
             f"{1e9 / r['ns_per_step']:.3g} | {r['cpu_ns_per_step']:.1f} | {note} |"
         )
+    r = a.get("python_loop_full")
+    if r:
+        gs_full = r["gearsim_run_ns_per_step"]
+        note = (
+            f"{ratio(r['ns_per_step'] / gs_full)} gearsim `Rig.run` on `sg_full` "
+            f"({gs_full:.1f} ns/step) "
+            f"({ratio(r['cpu_ns_per_step'] / r['gearsim_run_cpu_ns_per_step'])} on CPU time)"
+        )
+        if c_full:
+            note += f", {ratio(r['ns_per_step'] / c_full['median_ns'])} C `gs_rig_step`"
+        note += (
+            f"; {r['substeps']} sub-steps; max abs diff of base torque "
+            f"{r['max_abs_diff_base_torque_Nm']:.1e} N*m (peak {r['max_abs_base_torque_Nm']:.2f}), "
+            f"of follower speed {r['max_abs_diff_driven_speed_rad_s']:.1e} rad/s "
+            f"(peak {r['max_abs_driven_speed_rad_s']:.2f})"
+        )
+        md.append(
+            "| Python loop (floats, `math`), full Simple Gear rig (`sg_full`) | "
+            f"{r['samples']:.0e} | {r['ns_per_step']:.1f} | {1e9 / r['ns_per_step']:.3g} | "
+            f"{r['cpu_ns_per_step']:.1f} | {note} |"
+        )
     o = py.get("ode", {})
     if o.get("available"):
         gs_ode = o["gearsim_run_long_ns_per_step"]
@@ -252,25 +273,63 @@ def python_section(py: dict, c_step: dict | None) -> list[str]:
     return md
 
 
-def python_targets(py: dict, c_step: dict | None) -> list[tuple[str, str, str, str]]:
-    batch = py["batch"][0]
-    s = py["step"]
+def alternative_target(py: dict, c_step: dict | None, c_full: dict | None) -> tuple[str, str]:
+    """Figure and verdict of ">= 100x faster than the per-step Python
+    alternative", for the full rig (sg_full: what a user who needs backlash or
+    heating writes) and the rigid rig (sg_constant_viscous), from the measured
+    ratios to Rig.run (wall clock; CPU time decides "met on CPU time only")."""
     a = py["alternatives"]
+    target = 100.0
+    parts = []
+    verdicts = []
+    full = a.get("python_loop_full")
+    if full:
+        gs_full = full["gearsim_run_ns_per_step"]
+        speedup = full["ns_per_step"] / gs_full
+        cpu_speedup = full["cpu_ns_per_step"] / full["gearsim_run_cpu_ns_per_step"]
+        fig = (
+            f"full rig (`sg_full`): {ratio(speedup)} vs `Rig.run` "
+            f"({ratio(cpu_speedup)} on CPU time)"
+        )
+        if c_full:
+            fig += f", {ratio(full['ns_per_step'] / c_full['median_ns'])} vs C `gs_rig_step`"
+        parts.append(fig)
+        verdicts.append(("full", verdict(speedup, cpu_speedup, lambda v: v >= target)))
+    else:
+        parts.append("full rig: not measured")
     gs = a["gearsim_run_ns_per_step"]
     gs_cpu = a.get("gearsim_run_cpu_ns_per_step")
-    rate = batch["run_steps_per_s"]
-    cpu_rate = 1e9 / batch["run_cpu_ns_per_step"]
     loop = a["python_loop"]
     speedup = loop["ns_per_step"] / gs
+    cpu_speedup = loop["cpu_ns_per_step"] / gs_cpu if gs_cpu else speedup
+    fig = f"rigid rig (`sg_constant_viscous`): {ratio(speedup)} (`math` loop)"
     loop_np = a.get("python_loop_numpy")
-    fig = f"{speedup:.0f}x (`math` loop)"
     if loop_np:
-        fig += f" / {loop_np['ns_per_step'] / gs:.0f}x (numpy-scalar loop)"
+        fig += f" / {ratio(loop_np['ns_per_step'] / gs)} (numpy-scalar loop)"
     fig += " vs `Rig.run`"
     if gs_cpu:
-        fig += f" ({loop['cpu_ns_per_step'] / gs_cpu:.0f}x on CPU time)"
+        fig += f" ({ratio(cpu_speedup)} on CPU time)"
     if c_step:
-        fig += f"; {loop['ns_per_step'] / c_step['median_ns']:.0f}x vs C `gs_rig_step`"
+        fig += f", {ratio(loop['ns_per_step'] / c_step['median_ns'])} vs C `gs_rig_step`"
+    parts.append(fig)
+    verdicts.append(("rigid", verdict(speedup, cpu_speedup, lambda v: v >= target)))
+    if len(verdicts) == 1:
+        verdict_ = f"{verdicts[0][1]} for the rigid rig; full rig not measured"
+    elif verdicts[0][1] == verdicts[1][1]:
+        verdict_ = f"{verdicts[0][1]} for both rigs"
+    else:
+        verdict_ = ", ".join(f"{v} for the {name} rig" for name, v in verdicts)
+    return "; ".join(parts), verdict_
+
+
+def python_targets(
+    py: dict, c_step: dict | None, c_full: dict | None
+) -> list[tuple[str, str, str, str]]:
+    batch = py["batch"][0]
+    s = py["step"]
+    rate = batch["run_steps_per_s"]
+    cpu_rate = 1e9 / batch["run_cpu_ns_per_step"]
+    alt_fig, alt_verdict = alternative_target(py, c_step, c_full)
     return [
         (
             "Python batch >= 5 M steps/s",
@@ -287,8 +346,8 @@ def python_targets(py: dict, c_step: dict | None) -> list[tuple[str, str, str, s
         ),
         (
             ">= 100x faster than the per-step Python alternative",
-            fig,
-            "met" if speedup >= 100 else "missed",
+            alt_fig,
+            alt_verdict,
             "",
         ),
     ]
@@ -348,9 +407,10 @@ def build(results: Path) -> tuple[list[str], list[tuple[str, str, str, str]]]:
     md += m4_section(m4)
 
     c_step = timing.get(("sg_constant_viscous", "step"))
+    c_full = timing.get(("sg_full", "step"))
     if py and py.get("available"):
-        md += python_section(py, c_step)
-        targets += python_targets(py, c_step)
+        md += python_section(py, c_step, c_full)
+        targets += python_targets(py, c_step, c_full)
     else:
         reason = (py or {}).get("reason", "not run")
         md += [f"Python: not measured ({reason}).", ""]
