@@ -10,13 +10,16 @@
 #include "gs_math.h"
 
 #define NEWTON_ITERATIONS 12
-/* Newton also stops once its step is below this fraction of the bracket
- * scale |u_free| + c*|f0|: deterministic, and the worst case stays at
- * NEWTON_ITERATIONS evaluations. */
+/* Newton stops once its step is below NEWTON_TOLERANCE of the bracket scale
+ * |u_free| + (bracket width): deterministic, and the worst case stays at
+ * NEWTON_ITERATIONS evaluations. NEWTON_ASYMPTOTIC (about its square root)
+ * marks steps small enough for Newton's quadratic error bound to hold. */
 #ifdef GS_SINGLE_PRECISION
 #define NEWTON_TOLERANCE GS_R(1e-6)
+#define NEWTON_ASYMPTOTIC GS_R(1e-3)
 #else
 #define NEWTON_TOLERANCE GS_R(1e-13)
+#define NEWTON_ASYMPTOTIC GS_R(3e-7)
 #endif
 
 /* Force and its derivative along u when x = x0 + h*u (dfdu = h*df/dx + df/dv). */
@@ -99,20 +102,191 @@ static int lock_holds(const gs_mesh_ *m, gs_real x, gs_real required_force)
     return !(pull > m->lock_release_force);
 }
 
-gs_real gs_contact_solve(gs_mesh_ *m, gs_real x, gs_real u_free, gs_real h, gs_real inv_mass,
-                         gs_real *force, gs_real *f_spring)
+void gs_contact_prepare(const gs_mesh_ *m, gs_real h, gs_real inv_mass, gs_contact_step_ *cs)
 {
-    const gs_real c = h * inv_mass;
-    gs_real dfdu;
-    if (m->lock_enabled && m->locked) {
-        const gs_real required = u_free / c;
-        if (lock_holds(m, x, required)) {
-            (void)contact_force_d(m, x, GS_R(0.0), h, &dfdu, f_spring);
-            *force = required;
-            return GS_R(0.0);
-        }
-        m->locked = 0;
+    cs->h = h;
+    cs->inv_h = GS_R(1.0) / h;
+    cs->c = h * inv_mass;
+    cs->inv_c = GS_R(1.0) / cs->c;
+    cs->c_stiffness = cs->c * m->stiffness;
+    cs->inv_affine_damped = GS_R(1.0) / (GS_R(1.0) + cs->c * (m->stiffness * h + m->damping));
+    cs->inv_affine_undamped = GS_R(1.0) / (GS_R(1.0) + cs->c * m->stiffness * h);
+    cs->draw_dv = m->stiffness * h + m->damping;
+    cs->dxi_dv = h * m->inv_transition;
+    cs->transition = m->inv_transition > GS_R(0.0) ? GS_R(1.0) / m->inv_transition : GS_R(0.0);
+}
+
+/* ---- The no-pull contact (the default): closed forms and a short Newton.
+ *
+ * With the no-pull clip the force never pulls, so on the side s where the
+ * free motion ends (x + h*u_free beyond s*b/2) everything can be written in
+ * side-normalised variables: closing speed v = s*u, penetration
+ * delta(v) = p0 + h*v with p0 = s*x - b/2, force f_s = s*f >= 0. The residual
+ * Phi(v) = v - v_free + c*f_s(v) is then increasing with slope >= 1 wherever
+ * it is continuous, Phi(v_edge) < 0 at v_edge = -p0/h (teeth just touching)
+ * and Phi(v_free) >= 0: the root lies in [v_edge, v_free] and is unique.
+ * The full laws are affine in each piece, so their root is closed-form; the
+ * smooth law is affine beyond the transition region and needs Newton only
+ * inside it. */
+
+typedef struct {
+    const gs_contact_step_ *cs;
+    gs_real p0;     /* penetration at the start of the sub-step, m (< 0: apart) */
+    gs_real v_free; /* closing speed of the free motion, m/s */
+} closing_;
+
+/* Root of v - v_free + c*(K*delta(v) + damping*v) = 0: an affine piece. */
+static gs_real affine_root(const closing_ *q, gs_real inv_affine)
+{
+    return (q->v_free - q->cs->c_stiffness * q->p0) * inv_affine;
+}
+
+/* Full laws (4.3, 4.4): the affine piece's root if the teeth are in contact
+ * there and it pushes; the stop's edge if the law jumps over zero there
+ * (damping switched on at first contact); v_free if the clipped force is zero
+ * at v_free (separating faster than the spring pushes). */
+static gs_real full_root(const gs_mesh_ *m, const closing_ *q)
+{
+    gs_real v = affine_root(q, q->cs->inv_affine_damped);
+    if (m->hard_stop == GS_HARD_STOP_FULL_UNDAMPED && v < GS_R(0.0)) {
+        /* Phi is continuous at v = 0 and Phi(0) > 0: the rebound piece's root */
+        v = affine_root(q, q->cs->inv_affine_undamped);
     }
+    const gs_real v_edge = -q->p0 * q->cs->inv_h;
+    if (!(v > v_edge)) {
+        return v_edge;
+    }
+    return gs_min(v, q->v_free);
+}
+
+/* Smooth law (4.5) inside the transition region: f_s = S(xi)*max(0, K*delta + D*v),
+ * xi = delta/d, S = xi^2 (3 - 2 xi). Newton kept inside [lo, hi] (a step that
+ * leaves it bisects), started from v_guess. It stops at a step below the
+ * tolerance, or earlier once Newton's own error bound for the step just
+ * computed, |Phi''|*step^2/(2*Phi'), is below half the tolerance: that step
+ * is then taken without evaluating the law again. The bound is used only for
+ * steps already below sqrt(tolerance), where it is in its asymptotic range. */
+static gs_real smooth_transition_root(const gs_mesh_ *m, const closing_ *q, gs_real v_lo, gs_real v_hi,
+                                      gs_real v_guess)
+{
+    gs_real lo = v_lo; /* Phi(lo) <= 0 <= Phi(hi), narrowed every pass */
+    gs_real hi = v_hi;
+    const gs_contact_step_ *cs = q->cs;
+    const gs_real k = m->stiffness;
+    const gs_real d_damp = m->damping;
+    const gs_real inv_d = m->inv_transition;
+    const gs_real scale_v = gs_abs(q->v_free) + (hi - lo);
+    const gs_real tolerance = NEWTON_TOLERANCE * scale_v;
+    const gs_real asymptotic = NEWTON_ASYMPTOTIC * scale_v;
+    gs_real v = v_guess > lo && v_guess < hi ? v_guess : GS_R(0.5) * (lo + hi);
+    for (int i = 0; i < NEWTON_ITERATIONS; ++i) {
+        const gs_real delta = q->p0 + cs->h * v;
+        const gs_real xi = gs_clamp(delta * inv_d, GS_R(0.0), GS_R(1.0));
+        const gs_real raw = k * delta + d_damp * v;
+        gs_real phi = v - q->v_free;
+        gs_real slope = GS_R(1.0);
+        gs_real ds = GS_R(0.0);
+        if (raw > GS_R(0.0)) {
+            const gs_real s = xi * xi * (GS_R(3.0) - GS_R(2.0) * xi);
+            ds = GS_R(6.0) * xi * (GS_R(1.0) - xi) * cs->dxi_dv;
+            phi += cs->c * s * raw;
+            slope += cs->c * (ds * raw + s * cs->draw_dv);
+        }
+        if (phi > GS_R(0.0)) {
+            hi = v;
+        } else if (phi < GS_R(0.0)) {
+            lo = v;
+        } else {
+            return v;
+        }
+        const gs_real step = phi / slope;
+        const gs_real next = v - step;
+        const gs_real size = gs_abs(step);
+        int converged = size <= tolerance;
+        if (!converged && size <= asymptotic && raw > GS_R(0.0)) {
+            const gs_real dds = (GS_R(6.0) - GS_R(12.0) * xi) * cs->dxi_dv * cs->dxi_dv;
+            const gs_real curvature = cs->c * (dds * raw + GS_R(2.0) * ds * cs->draw_dv);
+            converged = gs_abs(curvature) * size * size <= slope * tolerance;
+        }
+        if (converged && next >= lo && next <= hi) {
+            return next;
+        }
+        v = next > lo && next < hi ? next : GS_R(0.5) * (lo + hi);
+    }
+    return v;
+}
+
+static gs_real smooth_root(const gs_mesh_ *m, const closing_ *q, gs_real v_guess)
+{
+    const gs_contact_step_ *cs = q->cs;
+    if (m->stiffness * (q->p0 + cs->h * q->v_free) + m->damping * q->v_free <= GS_R(0.0)) {
+        return q->v_free; /* the clipped force is zero at v_free: Phi(v_free) = 0 */
+    }
+    const gs_real v_edge = -q->p0 * cs->inv_h;
+    /* closing speed at which the penetration reaches the transition depth d */
+    const gs_real v_full = (cs->transition - q->p0) * cs->inv_h;
+    if (v_full < q->v_free) {
+        const gs_real force_at_full = gs_max(GS_R(0.0), m->stiffness * cs->transition + m->damping * v_full);
+        if (v_full - q->v_free + cs->c * force_at_full <= GS_R(0.0)) {
+            /* the root is beyond d, on the affine piece (or at v_free if it is clipped) */
+            return gs_clamp(affine_root(q, cs->inv_affine_damped), v_full, q->v_free);
+        }
+    }
+    return smooth_transition_root(m, q, v_edge, gs_min(v_full, q->v_free), v_guess);
+}
+
+/* Spring part of the force at penetration delta > 0 (side-normalised). */
+static gs_real spring_force(const gs_mesh_ *m, gs_real delta)
+{
+    gs_real f = m->stiffness * delta;
+    if (m->hard_stop == GS_HARD_STOP_SMOOTH) {
+        const gs_real xi = delta * m->inv_transition;
+        if (xi < GS_R(1.0)) {
+            f *= xi * xi * (GS_R(3.0) - GS_R(2.0) * xi);
+        }
+    }
+    return f;
+}
+
+static gs_real solve_no_pull(const gs_mesh_ *m, const gs_contact_step_ *cs, gs_real x, gs_real u_free,
+                             gs_real *force, gs_real *f_spring)
+{
+    const gs_real x_free = x + cs->h * u_free;
+    gs_real side;
+    if (x_free > m->half_gap) {
+        side = GS_R(1.0);
+    } else if (x_free < -m->half_gap) {
+        side = GS_R(-1.0);
+    } else {
+        *force = GS_R(0.0); /* teeth apart at the end of the free motion */
+        *f_spring = GS_R(0.0);
+        return u_free;
+    }
+    closing_ q;
+    q.cs = cs;
+    q.p0 = side * x - m->half_gap;
+    q.v_free = side * u_free;
+    gs_real v;
+    if (m->hard_stop == GS_HARD_STOP_SMOOTH) {
+        /* start from the last sub-step's force: it changes little between sub-steps */
+        v = smooth_root(m, &q, q.v_free - cs->c * side * m->contact_force);
+    } else {
+        v = full_root(m, &q);
+    }
+    const gs_real delta = q.p0 + cs->h * v;
+    *force = side * (q.v_free - v) * cs->inv_c;
+    *f_spring = delta > GS_R(0.0) ? side * spring_force(m, delta) : GS_R(0.0);
+    return side * v;
+}
+
+/* ---- The general contact (no_pull off): the damped laws may pull, so Phi
+ * need not be monotone; a bracketed Newton on the generic law. */
+static gs_real solve_bracketed(const gs_mesh_ *m, const gs_contact_step_ *cs, gs_real x,
+                               gs_real u_free, gs_real *force, gs_real *f_spring)
+{
+    const gs_real h = cs->h;
+    const gs_real c = cs->c;
+    gs_real dfdu;
     const gs_real f0 = contact_force_d(m, x + h * u_free, u_free, h, &dfdu, f_spring);
     gs_real u = u_free;
     *force = f0; /* teeth apart: no force; f_spring is that of u_free */
@@ -167,7 +341,25 @@ gs_real gs_contact_solve(gs_mesh_ *m, gs_real x, gs_real u_free, gs_real h, gs_r
             }
         }
     }
-    if (m->lock_enabled && gs_abs(x + h * u) >= m->half_gap && gs_abs(u) < m->lock_speed) {
+    return u;
+}
+
+gs_real gs_contact_solve(gs_mesh_ *m, const gs_contact_step_ *cs, gs_real x, gs_real u_free,
+                         gs_real *force, gs_real *f_spring)
+{
+    if (m->lock_enabled && m->locked) {
+        const gs_real required = u_free * cs->inv_c;
+        if (lock_holds(m, x, required)) {
+            gs_real dfdu;
+            (void)contact_force_d(m, x, GS_R(0.0), cs->h, &dfdu, f_spring);
+            *force = required;
+            return GS_R(0.0);
+        }
+        m->locked = 0;
+    }
+    const gs_real u = m->no_pull ? solve_no_pull(m, cs, x, u_free, force, f_spring)
+                                 : solve_bracketed(m, cs, x, u_free, force, f_spring);
+    if (m->lock_enabled && gs_abs(x + cs->h * u) >= m->half_gap && gs_abs(u) < m->lock_speed) {
         m->locked = 1;
     }
     return u;

@@ -40,10 +40,13 @@ void gs_mesh_loss_linearize(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real 
 gs_real gs_contact_force(const gs_mesh_ *m, gs_real x, gs_real u, gs_real *f_spring);
 /* Energy stored in the contact spring at x (J). */
 gs_real gs_contact_energy(const gs_mesh_ *m, gs_real x);
-/* Backward-Euler contact over one sub-step h: finds u with
- * u = u_free - h*inv_mass*f(x + h*u, u); returns u and the force. Handles the
- * static-contact lock when enabled. Fixed cost. */
-gs_real gs_contact_solve(gs_mesh_ *m, gs_real x, gs_real u_free, gs_real h, gs_real inv_mass,
+/* The constants of gs_contact_solve for sub-step h (s) and the inverse
+ * effective mass inv_mass (1/kg) at the pitch line. */
+void gs_contact_prepare(const gs_mesh_ *m, gs_real h, gs_real inv_mass, gs_contact_step_ *cs);
+/* Backward-Euler contact over one sub-step cs->h: finds u with
+ * u = u_free - cs->c*f(x + h*u, u); returns u, the force and its spring part.
+ * Handles the static-contact lock when enabled. Bounded cost. */
+gs_real gs_contact_solve(gs_mesh_ *m, const gs_contact_step_ *cs, gs_real x, gs_real u_free,
                          gs_real *force, gs_real *f_spring);
 
 /* Thermal mass: explicit heat flow q_W, or an ambient path through

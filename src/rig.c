@@ -134,9 +134,20 @@ static void rig_fill(gs_rig *r, gs_rig_block block, const gs_rig_params *p)
     r->accel_gain = p->dt_s / (p->accel_filter_time_constant_s + p->dt_s);
     r->substeps = 1;
     r->inv_eff_mass_contact = GS_R(0.0);
+    memset(&r->contact, 0, sizeof r->contact);
     if (r->mesh.backlash) {
         r->substeps = p->contact_substeps > 0 ? p->contact_substeps : automatic_substeps(r);
         r->inv_eff_mass_contact = contact_inverse_mass(r, r->dt / (gs_real)r->substeps);
+    }
+    /* sub-step invariants: the step path multiplies instead of dividing */
+    r->substep = r->dt / (gs_real)r->substeps;
+    r->inv_substeps = GS_R(1.0) / (gs_real)r->substeps;
+    r->inv_driven_inertia_sub = GS_R(1.0) / (r->driven_inertia + r->substep * r->mesh.mu_follower);
+    r->inv_base_inertia_sub = r->base_drive == GS_BASE_TORQUE_DRIVEN
+                                  ? GS_R(1.0) / (r->base_inertia + r->substep * r->mesh.mu_base)
+                                  : GS_R(0.0);
+    if (r->mesh.backlash) {
+        gs_contact_prepare(&r->mesh, r->substep, r->inv_eff_mass_contact, &r->contact);
     }
     gs_rig_reset(r);
 }
@@ -260,20 +271,20 @@ typedef struct {
 
 /* One sub-step from the current speeds with the meshing loss tau_mesh held:
  * free motion, then the backward-Euler contact. Changes only the lock flag. */
-static substep_end contact_substep(gs_rig *r, gs_real h, gs_real w_b_free, gs_real external,
-                                   gs_real tau_mesh)
+static inline substep_end contact_substep(gs_rig *r, gs_real w_b_free, gs_real external, gs_real tau_mesh)
 {
     gs_mesh_ *m = &r->mesh;
+    const gs_real h = r->substep;
     const gs_real r_b = m->base_radius;
     const gs_real sr_f = m->direction * m->follower_radius;
-    const gs_real j_f = r->driven_inertia + h * m->mu_follower;
-    const gs_real j_b = r->base_inertia + h * m->mu_base;
-    const gs_real w_f_free = (r->driven_inertia * r->driven_speed + h * (external - tau_mesh)) / j_f;
+    const gs_real w_f_free =
+        (r->driven_inertia * r->driven_speed + h * (external - tau_mesh)) * r->inv_driven_inertia_sub;
     substep_end e;
     const gs_real u_free = r_b * w_b_free - sr_f * w_f_free;
-    e.u = gs_contact_solve(m, m->position, u_free, h, r->inv_eff_mass_contact, &e.f, &e.f_spring);
-    e.w_f = w_f_free + h * sr_f * e.f / j_f;
-    e.w_b = r->base_drive == GS_BASE_SPEED_DRIVEN ? w_b_free : w_b_free - h * r_b * e.f / j_b;
+    e.u = gs_contact_solve(m, &r->contact, m->position, u_free, &e.f, &e.f_spring);
+    e.w_f = w_f_free + h * sr_f * e.f * r->inv_driven_inertia_sub;
+    e.w_b = r->base_drive == GS_BASE_SPEED_DRIVEN ? w_b_free
+                                                  : w_b_free - h * r_b * e.f * r->inv_base_inertia_sub;
     return e;
 }
 
@@ -282,7 +293,7 @@ static void backlash_step(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input
 {
     gs_mesh_ *m = &r->mesh;
     const int n = r->substeps;
-    const gs_real h = r->dt / (gs_real)n;
+    const gs_real h = r->substep;
     const gs_real r_b = m->base_radius;
     const gs_real sr_f = m->direction * m->follower_radius;
     const int speed_driven = r->base_drive == GS_BASE_SPEED_DRIVEN;
@@ -297,18 +308,17 @@ static void backlash_step(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input
         const gs_real external = driven_external(r, in->load, w_f);
         /* the held speed ramps linearly from the last sample to this one */
         const gs_real w_b_free =
-            speed_driven ? w_b_start + (in->base_speed_rad_s - w_b_start) * (gs_real)(k + 1) / (gs_real)n
-                         : (r->base_inertia * r->base_speed + h * in->base_torque_Nm)
-                               / (r->base_inertia + h * m->mu_base);
+            speed_driven ? w_b_start + (in->base_speed_rad_s - w_b_start) * ((gs_real)(k + 1) * r->inv_substeps)
+                         : (r->base_inertia * r->base_speed + h * in->base_torque_Nm) * r->inv_base_inertia_sub;
         const int locked = m->locked;
-        substep_end e = contact_substep(r, h, w_b_free, external, tau_mesh);
+        substep_end e = contact_substep(r, w_b_free, external, tau_mesh);
         if (tau_mesh * e.w_f < GS_R(0.0)) {
             /* The explicit loss would reverse the follower and do negative work:
              * at a reversal the smoothed law is near zero anyway, so this
              * sub-step runs without it. At most two solves per sub-step. */
             m->locked = locked;
             tau_mesh = GS_R(0.0);
-            e = contact_substep(r, h, w_b_free, external, tau_mesh);
+            e = contact_substep(r, w_b_free, external, tau_mesh);
         }
         m->position += h * (r_b * e.w_b - sr_f * e.w_f);
         m->contact_force = e.f;
@@ -329,7 +339,7 @@ static void backlash_step(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input
         sum_port += tau_b * e.w_b + tau_f * e.w_f;
         sum_f += e.f;
     }
-    const gs_real inv_n = GS_R(1.0) / (gs_real)n;
+    const gs_real inv_n = r->inv_substeps;
     out->base_port_torque_Nm = sum_tau_b * inv_n;
     out->base_torque_Nm = speed_driven ? out->base_port_torque_Nm + r->base_inertia * r->base_acceleration
                                        : in->base_torque_Nm;

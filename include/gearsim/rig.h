@@ -116,6 +116,11 @@ typedef struct {
     gs_real accel_gain;            /* dt/(tau + dt) */
     int substeps;
     gs_real inv_eff_mass_contact;  /* 1/m_eff at the pitch line, 1/kg */
+    gs_real substep;               /* h = dt/substeps, s */
+    gs_real inv_substeps;          /* 1/substeps */
+    gs_real inv_driven_inertia_sub;/* 1/(J_F + h*mu_F): the implicit viscous term */
+    gs_real inv_base_inertia_sub;  /* 1/(J_B + h*mu_B) (torque-driven base) */
+    gs_contact_step_ contact;      /* backward-Euler contact constants for h */
     /* state */
     int started;
     gs_real base_speed;

@@ -180,6 +180,21 @@ typedef struct {
     int locked;
 } gs_mesh_;
 
+/* Constants of the backward-Euler contact for one sub-step length
+ * (src/hard_stop.c), computed at init so that the step path divides little. */
+typedef struct {
+    gs_real h;                   /* sub-step, s */
+    gs_real inv_h;               /* 1/h, 1/s */
+    gs_real c;                   /* h/m_eff, s/kg */
+    gs_real inv_c;               /* m_eff/h, kg/s */
+    gs_real c_stiffness;         /* c*K, 1/s */
+    gs_real inv_affine_damped;   /* 1/(1 + c*(K*h + D)) */
+    gs_real inv_affine_undamped; /* 1/(1 + c*K*h) */
+    gs_real draw_dv;             /* K*h + D: d(K*delta + D*v)/dv, N*s/m */
+    gs_real dxi_dv;              /* h/d: d(delta/d)/dv for the smooth law, s/m */
+    gs_real transition;          /* d, m (smooth law) */
+} gs_contact_step_;
+
 #ifdef __cplusplus
 }
 #endif

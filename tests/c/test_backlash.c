@@ -453,6 +453,103 @@ static void run_stiff(gs_hard_stop_model m, int substeps, double load_amp)
     assert_true(contacts > 100);
 }
 
+/* The rig's contact is backward Euler: with one sub-step h = dt, the force
+ * of a step must equal the contact law at the END of the step,
+ * f = law(x1, u) with u = (x1 - x0)/h. Checked against the hand law above
+ * at every step. The solver never evaluates this law (closed forms for the
+ * full laws, Newton on side-normalised variables for the smooth one), so
+ * this is an independent check of its root. Where the law jumps (damping
+ * switched on at first contact of the full laws) Phi has no root: the
+ * teeth must then stop exactly at the stop's edge, with a force inside the
+ * jump [0, D*|u|]. */
+typedef struct {
+    gs_hard_stop_model model;
+    double K, D, d, hb, dt, x0;
+    int transition, beyond, at_edge;
+} be_check;
+
+static void check_backward_euler_step(be_check *c, const gs_rig_output *out, int step)
+{
+#ifdef GS_SINGLE_PRECISION
+    const double rtol = 2e-3;
+#else
+    const double rtol = 1e-8;
+#endif
+    const double x1 = (double)out->backlash_position_m;
+    const double u = (x1 - c->x0) / c->dt;
+    const double f = (double)out->contact_force_N;
+    const double law = contact_law(c->model, 1, c->K, c->D, c->d, c->hb, x1, u);
+    const double pen = fabs(x1) - c->hb;
+    const double atol = rtol * (fabs(f) + 1.0) + 2.0 * GS_EPS * c->hb * (c->K + c->D / c->dt);
+    const int on_edge = fabs(pen) <= 4.0 * GS_EPS * c->hb;
+    const int at_edge = on_edge && !is_zero(f);
+    if (!near_enough(f, law, 0.0, atol) &&
+        !(c->model != GS_HARD_STOP_SMOOTH && on_edge && f * sgn(x1) >= -atol &&
+          f * sgn(x1) <= fabs(c->D * u) + atol))
+        fail_msg("hard stop %d, step %d: x0 %.17g m, x1 %.17g m, u %.17g m/s: force %.17g N, "
+                 "law %.17g N",
+                 (int)c->model, step, c->x0, x1, u, f, law);
+    if (at_edge)
+        ++c->at_edge;
+    else if (pen > 0.0 && pen < c->d)
+        ++c->transition;
+    else if (pen >= c->d)
+        ++c->beyond;
+    c->x0 = x1;
+}
+
+static void run_backward_euler_residual(gs_hard_stop_model m)
+{
+    /* K*d = 20 N against tooth forces up to 40 N: both pieces of the smooth law */
+    const double g = 2.0, rB = 0.1, b = 1e-3, K = 1e6, D = 1e3, d = 2e-5, dt = 1e-3;
+    gs_simple_gear_params gp = backlash_gear(g, GS_ROTATES_OPPOSITE, m, b, rB, K, D);
+    gs_rig_params rp = gs_rig_params_default();
+    gs_rig rig;
+    gs_rig_output out;
+    be_check c = {m, K, D, d, b / 2.0, dt, 0.0, 0, 0, 0};
+    int k, trial;
+    gp.backlash.transition_region_m = R(d);
+    rp.dt_s = R(dt);
+    rp.contact_substeps = 1;
+    INIT_GEAR_RIG(&rig, &gp, &rp);
+    /* reversing drive, load changing sign: sustained contact on both flanks */
+    for (k = 0; k < 8000; ++k) {
+        const double t = k * dt;
+        const gs_rig_input in = rig_speed_input(
+            20.0 * sin(2.0 * TEST_PI * 0.5 * t) + 4.0 * sin(2.0 * TEST_PI * 1.25 * t),
+            2.0 + 6.0 * sin(2.0 * TEST_PI * 0.25 * t + 0.3));
+        gs_rig_step(&rig, &in, &out);
+        check_backward_euler_step(&c, &out, k);
+    }
+    /* free impacts from the centre at 64 closing speeds: the edge is reached
+     * at every fraction of a step, so the full laws' jump is hit too */
+    for (trial = 0; trial < 64; ++trial) {
+        gs_rig_reset(&rig);
+        c.x0 = 0.0;
+        for (k = 0; k < 40; ++k) {
+            const gs_rig_input in = rig_speed_input(k == 0 ? 0.0 : 0.3 + 0.05 * trial, 0.0);
+            gs_rig_step(&rig, &in, &out);
+            check_backward_euler_step(&c, &out, k);
+        }
+    }
+    print_message("hard stop %d: %d steps in the transition region, %d beyond, %d at a jump\n",
+                  (int)m, c.transition, c.beyond, c.at_edge);
+    /* both pieces of each law were exercised */
+    assert_true(c.beyond > 100);
+    if (m == GS_HARD_STOP_SMOOTH)
+        assert_true(c.transition > 100);
+    else
+        assert_true(c.at_edge > 10);
+}
+
+static void test_backward_euler_residual(void **state)
+{
+    (void)state;
+    run_backward_euler_residual(GS_HARD_STOP_SMOOTH);
+    run_backward_euler_residual(GS_HARD_STOP_FULL_UNDAMPED);
+    run_backward_euler_residual(GS_HARD_STOP_FULL_DAMPED);
+}
+
 typedef struct {
     gs_hard_stop_model model;
     int substeps;
@@ -481,6 +578,7 @@ int main(void)
         cmocka_unit_test(test_rebound_conservative),
         cmocka_unit_test(test_rebound_damping),
         cmocka_unit_test(test_no_pull),
+        cmocka_unit_test(test_backward_euler_residual),
         /* hard stop (smooth, full_undamped, full_damped) x (automatic sub-steps,
          * one sub-step, automatic with a load) */
         {"test_stiff_smooth_auto_substeps", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[0]},
