@@ -22,6 +22,13 @@
 #define NEWTON_ASYMPTOTIC GS_R(3e-7)
 #endif
 
+/* The smooth law's cubic step S(xi) = xi^2 (3 - 2 xi) over the transition
+ * region (physics.md 4.5): zero force and slope at first contact. */
+static inline gs_real smooth_step(gs_real xi)
+{
+    return xi * xi * (GS_R(3.0) - GS_R(2.0) * xi);
+}
+
 /* Force and its derivative along u when x = x0 + h*u (dfdu = h*df/dx + df/dv). */
 static gs_real contact_force_d(const gs_mesh_ *m, gs_real x, gs_real u, gs_real h,
                                gs_real *dfdu, gs_real *f_spring)
@@ -44,8 +51,7 @@ static gs_real contact_force_d(const gs_mesh_ *m, gs_real x, gs_real u, gs_real 
     if (m->hard_stop == GS_HARD_STOP_SMOOTH) {
         const gs_real xi_raw = gs_abs(delta) * m->inv_transition;
         if (xi_raw < GS_R(1.0)) {
-            /* cubic step S = xi^2 (3 - 2 xi): zero force and slope at first contact */
-            scale = xi_raw * xi_raw * (GS_R(3.0) - GS_R(2.0) * xi_raw);
+            scale = smooth_step(xi_raw);
             dscale_du = GS_R(6.0) * xi_raw * (GS_R(1.0) - xi_raw) * m->inv_transition * h * side;
         }
     }
@@ -187,7 +193,7 @@ static gs_real smooth_transition_root(const gs_mesh_ *m, const closing_ *q, gs_r
         gs_real slope = GS_R(1.0);
         gs_real ds = GS_R(0.0);
         if (raw > GS_R(0.0)) {
-            const gs_real s = xi * xi * (GS_R(3.0) - GS_R(2.0) * xi);
+            const gs_real s = smooth_step(xi);
             ds = GS_R(6.0) * xi * (GS_R(1.0) - xi) * cs->dxi_dv;
             phi += cs->c * s * raw;
             slope += cs->c * (ds * raw + s * cs->draw_dv);
@@ -242,7 +248,7 @@ static gs_real spring_force(const gs_mesh_ *m, gs_real delta)
     if (m->hard_stop == GS_HARD_STOP_SMOOTH) {
         const gs_real xi = delta * m->inv_transition;
         if (xi < GS_R(1.0)) {
-            f *= xi * xi * (GS_R(3.0) - GS_R(2.0) * xi);
+            f *= smooth_step(xi);
         }
     }
     return f;
