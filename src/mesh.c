@@ -102,6 +102,15 @@ void gs_mesh_reset(gs_mesh_ *m)
     m->locked = 0;
 }
 
+void gs_mesh_copy_state(gs_mesh_ *to, const gs_mesh_ *from)
+{
+    to->temperature = from->temperature;
+    to->position = from->position;
+    to->contact_force = from->contact_force;
+    to->last_follower_torque = from->last_follower_torque;
+    to->locked = from->locked;
+}
+
 void gs_mesh_thermal_step(gs_mesh_ *m, gs_real dt, gs_real loss_W, gs_real q_W,
                           gs_real ambient_K, gs_real conductance_W_K)
 {

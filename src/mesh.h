@@ -23,6 +23,8 @@ gs_status gs_mesh_set_backlash(gs_mesh_ *m, const gs_backlash_params *p, gs_real
 gs_status gs_mesh_set_thermal(gs_mesh_ *m, gs_real thermal_mass, gs_real initial_temperature,
                               gs_error *err);
 void gs_mesh_reset(gs_mesh_ *m);
+/* Copies the state fields (those gs_mesh_reset sets) from one mesh to another. */
+void gs_mesh_copy_state(gs_mesh_ *to, const gs_mesh_ *from);
 /* Copies a validated temperature -> efficiency table into the mesh. */
 void gs_mesh_set_temperature_table(gs_mesh_ *m, const gs_real *temperature, const gs_real *eta,
                                    int n);

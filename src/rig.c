@@ -193,6 +193,18 @@ void gs_rig_reset(gs_rig *rig)
     rig->base_acceleration = GS_R(0.0);
 }
 
+void gs_rig_copy_state(gs_rig *to, const gs_rig *from)
+{
+    gs_mesh_copy_state(&to->mesh, &from->mesh);
+    to->started = from->started;
+    to->base_speed = from->base_speed;
+    to->base_angle = from->base_angle;
+    to->driven_speed = from->driven_speed;
+    to->driven_position = from->driven_position;
+    to->previous_base_speed_input = from->previous_base_speed_input;
+    to->base_acceleration = from->base_acceleration;
+}
+
 /* External torque on the driven side: load, offset and smoothed Coulomb friction. */
 static gs_real driven_external(const gs_rig *r, gs_real load, gs_real w_f)
 {

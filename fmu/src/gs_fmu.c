@@ -524,7 +524,7 @@ static fmi2Status set_values(fmu *c, const char *function, gs_fmu_type type, con
             report_parameter_error(c, &staged, function, &err);
             return fmi2Error;
         }
-        gs_fmu_copy_rig_state(&rig, &c->d.rig);
+        gs_rig_copy_state(&rig, &c->d.rig);
         c->d.rig = rig;
         log_info(c, "%s: tunable parameters applied at t = %.17g s", function, current_time(&c->d));
     }
@@ -733,7 +733,7 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte serialized
             report_parameter_error(c, &d, "fmi2DeSerializeFMUstate", &err);
             return fmi2Error;
         }
-        gs_fmu_copy_rig_state(&rig, &d.rig);
+        gs_rig_copy_state(&rig, &d.rig);
         d.rig = rig;
     }
     if (*state == NULL) {

@@ -432,23 +432,6 @@ gs_status gs_fmu_init_rig(gs_fmu_rig rig, const gs_fmu_params *params, gs_rig *o
                                   : gs_rig_init_rack(out, &params->rack, &params->rig, err);
 }
 
-/* The fields under "state" in gearsim/types.h (gs_mesh_) and gearsim/rig.h (gs_rig). */
-void gs_fmu_copy_rig_state(gs_rig *to, const gs_rig *from)
-{
-    to->mesh.temperature = from->mesh.temperature;
-    to->mesh.position = from->mesh.position;
-    to->mesh.contact_force = from->mesh.contact_force;
-    to->mesh.last_follower_torque = from->mesh.last_follower_torque;
-    to->mesh.locked = from->mesh.locked;
-    to->started = from->started;
-    to->base_speed = from->base_speed;
-    to->base_angle = from->base_angle;
-    to->driven_speed = from->driven_speed;
-    to->driven_position = from->driven_position;
-    to->previous_base_speed_input = from->previous_base_speed_input;
-    to->base_acceleration = from->base_acceleration;
-}
-
 double gs_fmu_read_real(const gs_fmu_var *v, const void *base)
 {
     const unsigned char *p = (const unsigned char *)base + v->offset;

@@ -96,11 +96,6 @@ void gs_fmu_defaults(gs_fmu_params *params, gs_rig_input *input);
 /* Validates params and initialises the rig (gs_rig_init_gear / _rack). */
 gs_status gs_fmu_init_rig(gs_fmu_rig rig, const gs_fmu_params *params, gs_rig *out, gs_error *err);
 
-/* Copies the dynamic state (speeds, angles, temperature, backlash, filter and
- * linearisation seeds) of from into to, leaving to's constants: used to apply
- * a tunable parameter to a running rig and to rebuild a deserialized state. */
-void gs_fmu_copy_rig_state(gs_rig *to, const gs_rig *from);
-
 /* Value access. base is the gs_fmu_params, gs_rig_input or gs_rig_output the
  * variable's region names. */
 double gs_fmu_read_real(const gs_fmu_var *v, const void *base);

@@ -144,6 +144,12 @@ gs_status gs_rig_init_rack(gs_rig *rig, const gs_rack_pinion_params *rack,
 /* Back to the initial state (speeds, angles, temperature, backlash). */
 void gs_rig_reset(gs_rig *rig);
 
+/* Copies the state (speeds, angles, temperature, backlash, filters: what
+ * gs_rig_reset sets) of `from` into `to`, keeping the constants of `to`. For
+ * re-tuning a running rig: init a new rig from the new parameters, then copy
+ * the old one's state into it. */
+void gs_rig_copy_state(gs_rig *to, const gs_rig *from);
+
 /* One fixed step of dt_s. Cannot fail; bounded cost per instance (fixed
  * sub-step and iteration counts). Inputs must be finite; the outputs are then
  * finite. Speed-driven: the first step after init/reset takes its base speed
