@@ -115,9 +115,9 @@ void gs_contact_prepare(const gs_mesh_ *m, gs_real h, gs_real inv_mass, gs_conta
     cs->c = h * inv_mass;
     cs->inv_c = GS_R(1.0) / cs->c;
     cs->c_stiffness = cs->c * m->stiffness;
-    cs->inv_affine_damped = GS_R(1.0) / (GS_R(1.0) + cs->c * (m->stiffness * h + m->damping));
-    cs->inv_affine_undamped = GS_R(1.0) / (GS_R(1.0) + cs->c * m->stiffness * h);
     cs->draw_dv = m->stiffness * h + m->damping;
+    cs->inv_affine_damped = GS_R(1.0) / (GS_R(1.0) + cs->c * cs->draw_dv);
+    cs->inv_affine_undamped = GS_R(1.0) / (GS_R(1.0) + cs->c * m->stiffness * h);
     cs->dxi_dv = h * m->inv_transition;
     cs->transition = m->inv_transition > GS_R(0.0) ? GS_R(1.0) / m->inv_transition : GS_R(0.0);
 }

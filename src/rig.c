@@ -133,11 +133,8 @@ static void rig_fill(gs_rig *r, gs_rig_block block, const gs_rig_params *p)
     r->temperature_source = p->temperature_source;
     r->accel_gain = p->dt_s / (p->accel_filter_time_constant_s + p->dt_s);
     r->substeps = 1;
-    r->inv_eff_mass_contact = GS_R(0.0);
-    memset(&r->contact, 0, sizeof r->contact);
     if (r->mesh.backlash) {
         r->substeps = p->contact_substeps > 0 ? p->contact_substeps : automatic_substeps(r);
-        r->inv_eff_mass_contact = contact_inverse_mass(r, r->dt / (gs_real)r->substeps);
     }
     /* sub-step invariants: the step path multiplies instead of dividing */
     r->substep = r->dt / (gs_real)r->substeps;
@@ -146,7 +143,10 @@ static void rig_fill(gs_rig *r, gs_rig_block block, const gs_rig_params *p)
     r->inv_base_inertia_sub = r->base_drive == GS_BASE_TORQUE_DRIVEN
                                   ? GS_R(1.0) / (r->base_inertia + r->substep * r->mesh.mu_base)
                                   : GS_R(0.0);
+    r->inv_eff_mass_contact = GS_R(0.0);
+    memset(&r->contact, 0, sizeof r->contact);
     if (r->mesh.backlash) {
+        r->inv_eff_mass_contact = contact_inverse_mass(r, r->substep);
         gs_contact_prepare(&r->mesh, r->substep, r->inv_eff_mass_contact, &r->contact);
     }
     gs_rig_reset(r);
