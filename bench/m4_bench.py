@@ -53,8 +53,9 @@ LINK = [
 ]
 
 # Programs that pull in one model each (err may be NULL; step once on zeros).
+EMPTY = "empty image (start-up only)"  # the baseline the other images are measured against
 PROGRAMS = {
-    "empty image (start-up only)": "",
+    EMPTY: "",
     "Simple Gear block": """
         gs_simple_gear_params p = gs_simple_gear_params_default();
         static gs_simple_gear b; gs_gear_ports_in in = {0}; gs_gear_ports_out out;
@@ -147,6 +148,12 @@ def measure(build: Path) -> dict:
 
     startup = build / "startup.o"
     run([CC, *FLAGS, "-c", str(ROOT / "bench" / "m4" / "startup.c"), "-o", str(startup)])
+
+    def link(elf: Path, main_file: Path) -> None:
+        """An image of main_file (C source or object), the start-up code and the core."""
+        inputs = [str(main_file), str(startup), *map(str, objects)]
+        run([CC, *FLAGS, *inc, *LINK, "-o", str(elf), *inputs, "-lgcc"])
+
     images = {}
     for label, body in PROGRAMS.items():
         src = build / "image.c"
@@ -158,22 +165,9 @@ def measure(build: Path) -> dict:
             + "\n}\n"
         )
         elf = build / "image.elf"
-        run(
-            [
-                CC,
-                *FLAGS,
-                *inc,
-                *LINK,
-                "-o",
-                str(elf),
-                str(src),
-                str(startup),
-                *map(str, objects),
-                "-lgcc",
-            ]
-        )
+        link(elf, src)
         images[label] = size_of(elf)
-    base = images["empty image (start-up only)"]
+    base = images[EMPTY]
     linked = {
         label: {
             "text": s["text"] - base["text"],
@@ -181,7 +175,7 @@ def measure(build: Path) -> dict:
             "bss": s["bss"] - base["bss"],
         }
         for label, s in images.items()
-        if label != "empty image (start-up only)"
+        if label != EMPTY
     }
     print("Linked with --gc-sections, bytes added to an empty image (text / data / bss):")
     for label, s in linked.items():
@@ -194,19 +188,7 @@ def measure(build: Path) -> dict:
     bench_obj = build / "m4_bench.o"
     run([CC, *FLAGS, *inc, "-c", str(ROOT / "bench" / "m4" / "m4_bench.c"), "-o", str(bench_obj)])
     elf = build / "m4_bench.elf"
-    run(
-        [
-            CC,
-            *FLAGS,
-            *LINK,
-            "-o",
-            str(elf),
-            str(bench_obj),
-            str(startup),
-            *map(str, objects),
-            "-lgcc",
-        ]
-    )
+    link(elf, bench_obj)
     try:
         proc = run(
             [
@@ -234,9 +216,7 @@ def measure(build: Path) -> dict:
         return out
     # QEMU writes the semihosting console to stderr or stdout depending on its version
     text = proc.stdout + "\n" + proc.stderr
-    lines = [
-        ln.split() for ln in text.splitlines() if len(ln.split()) == 3 and ln.split()[1].isdigit()
-    ]
+    lines = [f for f in map(str.split, text.splitlines()) if len(f) == 3 and f[1].isdigit()]
     calib = next(int(ln[1]) for ln in lines if ln[0].startswith("calibration"))
     instr_per_tick = 2_000_000 / calib
     counts = []

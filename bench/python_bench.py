@@ -90,6 +90,30 @@ def make_rig(gearsim: Any, block: dict, rig: dict) -> Any:
     return gearsim.Model(block="simple_gear", block_params=block, rig_params=rig).rig(dt=P["dt"])
 
 
+def time_rig_run(rig: Any, w: np.ndarray, load: np.ndarray, repeats: int) -> dict[str, float]:
+    """median_time of Rig.run on (w, load) from the initial state."""
+
+    def run() -> None:
+        rig.reset()
+        rig.run(base_speed=w, load=load)
+
+    return median_time(run, repeats)
+
+
+def alternative_row(
+    t: dict[str, float], n: int, torque: Any, ref: np.ndarray, scale: float
+) -> dict:
+    """Time per step of an alternative of the rigid rig over its first n samples
+    and its base torque against gearsim's (ref)."""
+    return {
+        "samples": n,
+        "ns_per_step": t["median"] / n * 1e9,
+        "cpu_ns_per_step": t["cpu_median"] / n * 1e9,
+        "max_abs_diff_base_torque_Nm": float(np.max(np.abs(np.asarray(torque) - ref[:n]))),
+        "max_abs_base_torque_Nm": scale,
+    }
+
+
 def bench_batch(gearsim: Any, n: int, repeats: int) -> list[dict]:
     w, load = alt.scenario(n)
     rows = []
@@ -98,16 +122,11 @@ def bench_batch(gearsim: Any, n: int, repeats: int) -> list[dict]:
         ("sg_full", FULL_BLOCK, FULL_RIG),
     ):
         rig = make_rig(gearsim, block, rig_params)
-
-        def run(rig: Any = rig) -> None:
-            rig.reset()
-            rig.run(base_speed=w, load=load)
-
         cold_rig = make_rig(gearsim, block, rig_params)
         t0 = time.perf_counter()
         cold_rig.run(base_speed=w, load=load)
         cold = time.perf_counter() - t0
-        t = median_time(run, repeats)
+        t = time_rig_run(rig, w, load, repeats)
         inputs = rig.inputs(base_speed=w, load=load)
         out = np.empty((n, 15))
 
@@ -168,71 +187,44 @@ def bench_step(gearsim: Any, blocks: int, calls: int) -> dict:
     }
 
 
-def bench_alternatives(gearsim: Any, n_loop: int, n_vec: int, repeats: int) -> dict:
-    res: dict[str, Any] = {}
+def bench_alternatives(gearsim: Any, n_loop: int, gs_row: dict, repeats: int) -> dict:
+    """The rigid rig's alternatives against Rig.run on sg_constant_viscous,
+    whose time is bench_batch's (gs_row): the same run, not timed twice."""
+    n_vec = gs_row["samples"]
+    res: dict[str, Any] = {
+        "gearsim_run_ns_per_step": gs_row["run_ns_per_step"],
+        "gearsim_run_cpu_ns_per_step": gs_row["run_cpu_ns_per_step"],
+    }
     # gearsim reference on the same inputs
     w, load = alt.scenario(n_vec)
-    rig = make_rig(gearsim, RIGID_BLOCK, RIG)
-    ref = rig.run(base_speed=w, load=load).base_torque
+    ref = make_rig(gearsim, RIGID_BLOCK, RIG).run(base_speed=w, load=load).base_torque
     scale = float(np.max(np.abs(ref)))
-
-    def gs_run() -> None:
-        rig.reset()
-        rig.run(base_speed=w, load=load)
-
-    t_gs = median_time(gs_run, repeats)
-    res["gearsim_run_ns_per_step"] = t_gs["median"] / n_vec * 1e9
-    res["gearsim_run_cpu_ns_per_step"] = t_gs["cpu_median"] / n_vec * 1e9
 
     # numpy, vectorised
     vec = alt.numpy_vectorised(w, load)
     t_vec = median_time(lambda: alt.numpy_vectorised(w, load), repeats)
-    res["numpy_vectorised"] = {
-        "samples": n_vec,
-        "ns_per_step": t_vec["median"] / n_vec * 1e9,
-        "cpu_ns_per_step": t_vec["cpu_median"] / n_vec * 1e9,
-        "max_abs_diff_base_torque_Nm": float(np.max(np.abs(vec - ref))),
-        "max_abs_base_torque_Nm": scale,
-    }
+    res["numpy_vectorised"] = alternative_row(t_vec, n_vec, vec, ref, scale)
 
     # Python loop, one step per sample
     wl, ll = w[:n_loop], load[:n_loop]
-    loop = np.asarray(alt.python_loop(wl, ll))
+    loop = alt.python_loop(wl, ll)
     t_loop = median_time(lambda: alt.python_loop(wl, ll), max(3, repeats // 2), warmup=0)
-    res["python_loop"] = {
-        "samples": n_loop,
-        "ns_per_step": t_loop["median"] / n_loop * 1e9,
-        "cpu_ns_per_step": t_loop["cpu_median"] / n_loop * 1e9,
-        "max_abs_diff_base_torque_Nm": float(np.max(np.abs(loop - ref[:n_loop]))),
-        "max_abs_base_torque_Nm": scale,
-    }
+    res["python_loop"] = alternative_row(t_loop, n_loop, loop, ref, scale)
     # the same loop over numpy arrays and numpy scalar functions (slower still)
     n_np = max(1000, n_loop // 10)
     wn, ln = w[:n_np], load[:n_np]
     loop_np = alt.python_loop_numpy(wn, ln)
     t_np = median_time(lambda: alt.python_loop_numpy(wn, ln), 3, warmup=0)
-    res["python_loop_numpy"] = {
-        "samples": n_np,
-        "ns_per_step": t_np["median"] / n_np * 1e9,
-        "cpu_ns_per_step": t_np["cpu_median"] / n_np * 1e9,
-        "max_abs_diff_base_torque_Nm": float(np.max(np.abs(loop_np - ref[:n_np]))),
-        "max_abs_base_torque_Nm": scale,
-    }
+    res["python_loop_numpy"] = alternative_row(t_np, n_np, loop_np, ref, scale)
     return res
 
 
-def bench_full_loop(gearsim: Any, n_loop: int, n_ref: int, repeats: int) -> dict:
-    """The full rig (sg_full) in a Python loop against gearsim's Rig.run on it."""
-    w, load = alt.scenario(n_ref)
+def bench_full_loop(gearsim: Any, n_loop: int, gs_row: dict, repeats: int) -> dict:
+    """The full rig (sg_full) in a Python loop against gearsim's Rig.run on it,
+    whose time is bench_batch's (gs_row): the same run, not timed twice."""
+    # = the first n_loop samples of the batch's input (scenario is elementwise in t)
+    wl, ll = alt.scenario(n_loop)
     rig = make_rig(gearsim, FULL_BLOCK, FULL_RIG)
-
-    def gs_run() -> None:
-        rig.reset()
-        rig.run(base_speed=w, load=load)
-
-    t_gs = median_time(gs_run, repeats)
-    wl, ll = w[:n_loop], load[:n_loop]
-    rig.reset()
     ref = rig.run(base_speed=wl, load=ll)
     loop = alt.python_loop_full(wl, ll)  # also the warm-up of the timing
     t_loop = median_time(lambda: alt.python_loop_full(wl, ll), max(3, repeats // 2), warmup=0)
@@ -249,9 +241,9 @@ def bench_full_loop(gearsim: Any, n_loop: int, n_ref: int, repeats: int) -> dict
         "gearsim_substeps": rig.substeps,
         "ns_per_step": t_loop["median"] / n_loop * 1e9,
         "cpu_ns_per_step": t_loop["cpu_median"] / n_loop * 1e9,
-        "gearsim_samples": n_ref,
-        "gearsim_run_ns_per_step": t_gs["median"] / n_ref * 1e9,
-        "gearsim_run_cpu_ns_per_step": t_gs["cpu_median"] / n_ref * 1e9,
+        "gearsim_samples": gs_row["samples"],
+        "gearsim_run_ns_per_step": gs_row["run_ns_per_step"],
+        "gearsim_run_cpu_ns_per_step": gs_row["run_cpu_ns_per_step"],
         "max_abs_diff_base_torque_Nm": tau_diff,
         "max_abs_base_torque_Nm": tau_peak,
         "rel_diff_base_torque": tau_diff / tau_peak,
@@ -269,20 +261,10 @@ def bench_ode(gearsim: Any, n: int, repeats: int) -> dict:
     w, load = alt.scenario(n)
     rig = make_rig(gearsim, BACKLASH_BLOCK, RIG)
     ref = rig.run(base_speed=w, load=load)
-
-    def gs_run() -> None:
-        rig.reset()
-        rig.run(base_speed=w, load=load)
-
     # a short run is dominated by fixed Python costs: time a 100x longer one per step too
-    t_gs = median_time(gs_run, repeats)
+    t_gs = time_rig_run(rig, w, load, repeats)
     w_long, load_long = alt.scenario(100 * n)
-
-    def gs_run_long() -> None:
-        rig.reset()
-        rig.run(base_speed=w_long, load=load_long)
-
-    t_gs_long = median_time(gs_run_long, max(3, repeats // 2))
+    t_gs_long = time_rig_run(rig, w_long, load_long, max(3, repeats // 2))
     out: dict[str, Any] = {
         "available": True,
         "scipy": scipy.__version__,
@@ -330,12 +312,14 @@ def main() -> int:
             args.json.write_text(json.dumps({"available": False, "reason": str(exc)}) + "\n")
         return 0
     quick = args.quick
+    repeats = 3 if quick else 7
     res: dict[str, Any] = {
         "available": True,
         "python": sys.version.split()[0],
         "numpy": np.__version__,
     }
-    res["batch"] = bench_batch(gearsim, 100_000 if quick else 1_000_000, 3 if quick else 7)
+    res["batch"] = bench_batch(gearsim, 100_000 if quick else 1_000_000, repeats)
+    batch = {row["config"]: row for row in res["batch"]}
     for row in res["batch"]:
         print(
             f"Rig.run {row['config']:20s} {row['samples']:.0e} samples: "
@@ -353,7 +337,7 @@ def main() -> int:
         f"(cpu {s['cpu_median_us']:.2f})"
     )
     res["alternatives"] = bench_alternatives(
-        gearsim, 20_000 if quick else 200_000, 100_000 if quick else 1_000_000, 3 if quick else 7
+        gearsim, 20_000 if quick else 200_000, batch["sg_constant_viscous"], repeats
     )
     a = res["alternatives"]
     for key in ("python_loop", "python_loop_numpy", "numpy_vectorised"):
@@ -365,7 +349,7 @@ def main() -> int:
             f"(of {r['max_abs_base_torque_Nm']:.2f})"
         )
     a["python_loop_full"] = bench_full_loop(
-        gearsim, 4000 if quick else 20_000, 100_000 if quick else 1_000_000, 3 if quick else 7
+        gearsim, 4000 if quick else 20_000, batch["sg_full"], repeats
     )
     r = a["python_loop_full"]
     print(

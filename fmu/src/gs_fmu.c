@@ -159,10 +159,19 @@ static int allowed(const fmu *c, const char *function, int modes)
 
 /* ---- helpers */
 
+/* dt is a fixed parameter: once the rig is initialised its dt is the same
+ * value, and before that steps is 0. */
 static double current_time(const fmu_data *d)
 {
-    const double dt = d->rig_ready ? (double)d->rig.dt : (double)d->params.rig.dt_s;
-    return d->start_time + (double)d->steps * dt;
+    return d->start_time + (double)d->steps * (double)d->params.rig.dt_s;
+}
+
+/* The data of a newly instantiated or reset FMU: start values, no rig yet. */
+static void instantiated_data(fmu_data *d)
+{
+    memset(d, 0, sizeof *d);
+    gs_fmu_defaults(&d->params, &d->input);
+    d->mode = MODE_INSTANTIATED;
 }
 
 static void *region_of(fmu_data *d, gs_fmu_region region)
@@ -173,17 +182,6 @@ static void *region_of(fmu_data *d, gs_fmu_region region)
     case GS_FMU_AT_OUTPUT: return &d->output;
     }
     return NULL;
-}
-
-static const char *type_name(gs_fmu_type type)
-{
-    switch (type) {
-    case GS_FMU_T_REAL: return "Real";
-    case GS_FMU_T_INTEGER: return "Integer";
-    case GS_FMU_T_BOOLEAN: return "Boolean";
-    case GS_FMU_T_ENUMERATION: return "Enumeration";
-    }
-    return "?";
 }
 
 /* "efficiency_const = 1.5" when the failing parameter is one scalar variable. */
@@ -216,6 +214,22 @@ static void report_parameter_error(const fmu *c, const fmu_data *d, const char *
     describe_value(c, d, parameter, value, sizeof value);
     log_status(c, fmi2Error, "%s: parameter \"%s\" rejected%s: %s (gearsim status %d)", function, parameter,
                value, err->message != NULL ? err->message : gs_status_str(err->status), (int)err->status);
+}
+
+/* Re-initialises *rig from with->params (which validates them) and carries
+ * its running state over, so that the rig constants always follow the
+ * parameters. A refused value is logged and leaves *rig unchanged. */
+static int reinit_rig_keep_state(const fmu *c, const fmu_data *with, gs_rig *rig, const char *function)
+{
+    gs_rig fresh;
+    gs_error err;
+    if (gs_fmu_init_rig(THIS_RIG, &with->params, &fresh, &err) != GS_OK) {
+        report_parameter_error(c, with, function, &err);
+        return 0;
+    }
+    gs_rig_copy_state(&fresh, rig);
+    *rig = fresh;
+    return 1;
 }
 
 /* Outputs before the first step: the initial state, zero torques and powers. */
@@ -334,9 +348,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     c->log_info = 1;
     memcpy(c->guid, guid, sizeof guid);
     c->nvars = gs_fmu_variables(THIS_RIG, c->vars, GS_FMU_MAX_VARS);
-    memset(&c->d, 0, sizeof c->d);
-    gs_fmu_defaults(&c->d.params, &c->d.input);
-    c->d.mode = MODE_INSTANTIATED;
+    instantiated_data(&c->d);
     log_info(c, "fmi2Instantiate: %s, gearsim %s, %zu variables", gs_fmu_model_identifier(THIS_RIG),
              GS_VERSION_STRING, c->nvars);
     return c;
@@ -420,26 +432,24 @@ fmi2Status fmi2Reset(fmi2Component comp)
     if (c == NULL || !allowed(c, "fmi2Reset", MODE_ANY)) {
         return fmi2Error;
     }
-    memset(&c->d, 0, sizeof c->d);
-    gs_fmu_defaults(&c->d.params, &c->d.input);
-    c->d.mode = MODE_INSTANTIATED;
+    instantiated_data(&c->d);
     return fmi2OK;
 }
 
 /* ---- get and set */
 
-static int check_vr(const fmu *c, const char *function, fmi2ValueReference vr, int want_integer_or_enum,
-                    gs_fmu_type type)
+/* An fmi2*Integer call also serves the Enumeration variables. */
+static int check_vr(const fmu *c, const char *function, fmi2ValueReference vr, gs_fmu_type type)
 {
     if (vr >= c->nvars) {
         log_status(c, fmi2Error, "%s: unknown value reference %u", function, (unsigned)vr);
         return 0;
     }
     const gs_fmu_type t = c->vars[vr].type;
-    const int ok = want_integer_or_enum ? (t == GS_FMU_T_INTEGER || t == GS_FMU_T_ENUMERATION) : t == type;
+    const int ok = t == type || (type == GS_FMU_T_INTEGER && t == GS_FMU_T_ENUMERATION);
     if (!ok) {
         log_status(c, fmi2Error, "%s: variable \"%s\" (value reference %u) is of type %s", function,
-                   c->vars[vr].name, (unsigned)vr, type_name(t));
+                   c->vars[vr].name, (unsigned)vr, gs_fmu_type_name(t));
         return 0;
     }
     return 1;
@@ -456,7 +466,7 @@ static fmi2Status get_values(fmu *c, const char *function, gs_fmu_type type, con
         return fmi2Error;
     }
     for (size_t i = 0; i < nvr; ++i) {
-        if (!check_vr(c, function, vr[i], type == GS_FMU_T_INTEGER, type)) {
+        if (!check_vr(c, function, vr[i], type)) {
             return fmi2Error;
         }
         const gs_fmu_var *v = &c->vars[vr[i]];
@@ -488,7 +498,7 @@ static fmi2Status set_values(fmu *c, const char *function, gs_fmu_type type, con
     memcpy(&staged.input, &c->d.input, sizeof staged.input);
     int parameter_set = 0;
     for (size_t i = 0; i < nvr; ++i) {
-        if (!check_vr(c, function, vr[i], type == GS_FMU_T_INTEGER, type)) {
+        if (!check_vr(c, function, vr[i], type)) {
             return fmi2Error;
         }
         const gs_fmu_var *v = &c->vars[vr[i]];
@@ -518,14 +528,9 @@ static fmi2Status set_values(fmu *c, const char *function, gs_fmu_type type, con
     if (parameter_set && c->d.mode == MODE_STEP && c->d.rig_ready &&
         memcmp(&staged.params, &c->d.params, sizeof staged.params) != 0) {
         /* a tunable parameter of a running rig: validate, keep the state */
-        gs_rig rig;
-        gs_error err;
-        if (gs_fmu_init_rig(THIS_RIG, &staged.params, &rig, &err) != GS_OK) {
-            report_parameter_error(c, &staged, function, &err);
+        if (!reinit_rig_keep_state(c, &staged, &c->d.rig, function)) {
             return fmi2Error;
         }
-        gs_rig_copy_state(&rig, &c->d.rig);
-        c->d.rig = rig;
         log_info(c, "%s: tunable parameters applied at t = %.17g s", function, current_time(&c->d));
     }
     memcpy(&c->d.params, &staged.params, sizeof staged.params);
@@ -548,19 +553,25 @@ fmi2Status fmi2GetBoolean(fmi2Component comp, const fmi2ValueReference vr[], siz
     return get_values((fmu *)comp, "fmi2GetBoolean", GS_FMU_T_BOOLEAN, vr, nvr, NULL, value);
 }
 
-fmi2Status fmi2GetString(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr, fmi2String value[])
+/* fmi2GetString and fmi2SetString: an empty call succeeds, any other is refused. */
+static fmi2Status no_string_variables(fmi2Component comp, const char *function, size_t nvr)
 {
     fmu *c = (fmu *)comp;
-    (void)vr;
-    (void)value;
     if (c == NULL) {
         return fmi2Error;
     }
     if (nvr > 0) {
-        log_status(c, fmi2Error, "fmi2GetString: the FMU has no String variables");
+        log_status(c, fmi2Error, "%s: the FMU has no String variables", function);
         return fmi2Error;
     }
     return fmi2OK;
+}
+
+fmi2Status fmi2GetString(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr, fmi2String value[])
+{
+    (void)vr;
+    (void)value;
+    return no_string_variables(comp, "fmi2GetString", nvr);
 }
 
 fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[])
@@ -582,17 +593,9 @@ fmi2Status fmi2SetBoolean(fmi2Component comp, const fmi2ValueReference vr[], siz
 
 fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[])
 {
-    fmu *c = (fmu *)comp;
     (void)vr;
     (void)value;
-    if (c == NULL) {
-        return fmi2Error;
-    }
-    if (nvr > 0) {
-        log_status(c, fmi2Error, "fmi2SetString: the FMU has no String variables");
-        return fmi2Error;
-    }
-    return fmi2OK;
+    return no_string_variables(comp, "fmi2SetString", nvr);
 }
 
 /* ---- FMU state */
@@ -601,6 +604,20 @@ fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[], size
 #define STATE_FORMAT 1u
 #define STATE_HEADER_SIZE (8 + 4 + 4 + 8 + GS_FMU_GUID_SIZE)
 #define STATE_SIZE (STATE_HEADER_SIZE + sizeof(fmu_data))
+
+/* Copies d into *state, allocating the state first when *state is NULL. */
+static fmi2Status store_state(const fmu *c, const char *function, fmi2FMUstate *state, const fmu_data *d)
+{
+    if (*state == NULL) {
+        *state = c->allocate(1, sizeof(fmu_data));
+        if (*state == NULL) {
+            log_status(c, fmi2Error, "%s: out of memory", function);
+            return fmi2Error;
+        }
+    }
+    memcpy(*state, d, sizeof *d);
+    return fmi2OK;
+}
 
 fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate *state)
 {
@@ -612,15 +629,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate *state)
         log_status(c, fmi2Error, "fmi2GetFMUstate: NULL argument");
         return fmi2Error;
     }
-    if (*state == NULL) {
-        *state = c->allocate(1, sizeof(fmu_data));
-        if (*state == NULL) {
-            log_status(c, fmi2Error, "fmi2GetFMUstate: out of memory");
-            return fmi2Error;
-        }
-    }
-    memcpy(*state, &c->d, sizeof(fmu_data));
-    return fmi2OK;
+    return store_state(c, "fmi2GetFMUstate", state, &c->d);
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate state)
@@ -725,26 +734,11 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte serialized
         log_status(c, fmi2Error, "fmi2DeSerializeFMUstate: corrupt state");
         return fmi2Error;
     }
-    if (d.rig_ready) {
-        /* rebuild the rig constants from the (validated) parameters, keep the state */
-        gs_rig rig;
-        gs_error err;
-        if (gs_fmu_init_rig(THIS_RIG, &d.params, &rig, &err) != GS_OK) {
-            report_parameter_error(c, &d, "fmi2DeSerializeFMUstate", &err);
-            return fmi2Error;
-        }
-        gs_rig_copy_state(&rig, &d.rig);
-        d.rig = rig;
+    /* the bytes carry the state; the rig constants come from the parameters */
+    if (d.rig_ready && !reinit_rig_keep_state(c, &d, &d.rig, "fmi2DeSerializeFMUstate")) {
+        return fmi2Error;
     }
-    if (*state == NULL) {
-        *state = c->allocate(1, sizeof(fmu_data));
-        if (*state == NULL) {
-            log_status(c, fmi2Error, "fmi2DeSerializeFMUstate: out of memory");
-            return fmi2Error;
-        }
-    }
-    memcpy(*state, &d, sizeof d);
-    return fmi2OK;
+    return store_state(c, "fmi2DeSerializeFMUstate", state, &d);
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp, const fmi2ValueReference vUnknown_ref[],

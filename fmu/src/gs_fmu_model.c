@@ -464,6 +464,17 @@ void gs_fmu_write_int(const gs_fmu_var *v, void *base, int value)
     memcpy((unsigned char *)base + v->offset, &value, sizeof value);
 }
 
+const char *gs_fmu_type_name(gs_fmu_type type)
+{
+    switch (type) {
+    case GS_FMU_T_REAL: return "Real";
+    case GS_FMU_T_INTEGER: return "Integer";
+    case GS_FMU_T_BOOLEAN: return "Boolean";
+    case GS_FMU_T_ENUMERATION: return "Enumeration";
+    }
+    return "?";
+}
+
 const char *gs_fmu_model_identifier(gs_fmu_rig rig)
 {
     return rig == GS_FMU_RIG_GEAR ? "gearsim_gear_rig" : "gearsim_rack_rig";

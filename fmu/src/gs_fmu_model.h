@@ -103,6 +103,9 @@ void gs_fmu_write_real(const gs_fmu_var *v, void *base, double value);
 int gs_fmu_read_int(const gs_fmu_var *v, const void *base);
 void gs_fmu_write_int(const gs_fmu_var *v, void *base, int value);
 
+/* "Real", "Integer", "Boolean" or "Enumeration": the FMI element name. */
+const char *gs_fmu_type_name(gs_fmu_type type);
+
 const char *gs_fmu_model_identifier(gs_fmu_rig rig);
 const char *gs_fmu_model_name(gs_fmu_rig rig);
 const char *gs_fmu_model_description(gs_fmu_rig rig);

@@ -243,19 +243,20 @@ static int write_xml(gs_fmu_rig rig, const char *path)
     }
     fprintf(f, "  </ModelVariables>\n");
 
-    fprintf(f, "  <ModelStructure>\n    <Outputs>\n");
-    for (size_t i = 0; i < n; ++i) {
-        if (vars[i].causality == GS_FMU_C_OUTPUT) {
-            fprintf(f, "      <Unknown index=\"%zu\"/>\n", i + 1);
+    /* every output has initial="calculated" (the default), which makes it an
+     * initial unknown as well; neither list declares dependencies */
+    static const char *const unknown_lists[] = {"Outputs", "InitialUnknowns"};
+    fprintf(f, "  <ModelStructure>\n");
+    for (size_t l = 0; l < sizeof unknown_lists / sizeof unknown_lists[0]; ++l) {
+        fprintf(f, "    <%s>\n", unknown_lists[l]);
+        for (size_t i = 0; i < n; ++i) {
+            if (vars[i].causality == GS_FMU_C_OUTPUT) {
+                fprintf(f, "      <Unknown index=\"%zu\"/>\n", i + 1);
+            }
         }
+        fprintf(f, "    </%s>\n", unknown_lists[l]);
     }
-    fprintf(f, "    </Outputs>\n    <InitialUnknowns>\n");
-    for (size_t i = 0; i < n; ++i) {
-        if (vars[i].causality == GS_FMU_C_OUTPUT) {
-            fprintf(f, "      <Unknown index=\"%zu\"/>\n", i + 1);
-        }
-    }
-    fprintf(f, "    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n");
+    fprintf(f, "  </ModelStructure>\n</fmiModelDescription>\n");
     if (fclose(f) != 0) {
         perror(path);
         return 1;
@@ -343,10 +344,7 @@ static int write_markdown(gs_fmu_rig rig)
             (void)snprintf(name, sizeof name, "%s", v->name);
             printf("| %zu ", i);
         }
-        const char *type = v->type == GS_FMU_T_REAL      ? "Real"
-                           : v->type == GS_FMU_T_INTEGER ? "Integer"
-                           : v->type == GS_FMU_T_BOOLEAN ? "Boolean"
-                                                         : v->enum_type;
+        const char *type = v->type == GS_FMU_T_ENUMERATION ? v->enum_type : gs_fmu_type_name(v->type);
         printf("| `%s` | %s | %s | %s | %s | %s | %s |\n", name, causality_name(v->causality),
                variability_name(v->variability), type,
                v->unit != NULL ? v->unit : (v->type == GS_FMU_T_REAL ? "1" : ""), start, v->description);

@@ -406,20 +406,12 @@ def test_reset_restores_start_values_and_start_time_is_kept(instance):
 
     values = {"friction_model": 1, "efficiency_const": 0.9, "heat_path": True}
     inst = instance("gear")
-    inst.fmu.setupExperiment(startTime=10.0)
-    inst.time = 10.0
-    inst.fmu.enterInitializationMode()
-    inst.set(values)
-    inst.fmu.exitInitializationMode()
+    inst.start(values, start_time=10.0)
     first = run(inst)
     inst.fmu.reset()
     assert inst.fmu.getInteger([inst.vars["friction_model"].valueReference]) == [0]
     assert inst.fmu.getBoolean([inst.vars["heat_path"].valueReference]) == [False]
-    inst.fmu.setupExperiment(startTime=10.0)
-    inst.time = 10.0
-    inst.fmu.enterInitializationMode()
-    inst.set(values)
-    inst.fmu.exitInitializationMode()
+    inst.start(values, start_time=10.0)
     assert run(inst).tobytes() == first.tobytes()
 
 
