@@ -224,15 +224,6 @@ def test_model_rig_keeps_the_model():
 
 # -- Rig.step: the C per-step entry point (gspy_rig_step) and its slow path ------
 
-_STEP_INPUTS = (
-    "base_speed",
-    "base_torque",
-    "load",
-    "ambient_temperature",
-    "measured_temperature",
-)
-
-
 def _step_rigs():
     """Speed- and torque-driven rigs of both blocks, with and without temperature input."""
     return [
@@ -263,7 +254,7 @@ _VALID_INPUTS = {
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf, np.float64("nan"), float("-inf")])
-@pytest.mark.parametrize("name", _STEP_INPUTS)
+@pytest.mark.parametrize("name", gearsim.INPUT_NAMES)  # Rig.step's keywords
 def test_step_rejects_non_finite_inputs_naming_them(name, bad):
     for rig in _step_rigs():
         rig.step(**_VALID_INPUTS)

@@ -14,6 +14,7 @@ from typing import Any, ClassVar
 
 from . import params as P
 from ._lib import check, ffi, lib
+from .errors import InputError, ModelFileError
 
 __all__ = ["Block", "SimpleGear", "RackPinion", "make_block"]
 
@@ -35,9 +36,10 @@ class Block:
         given = P.normalize_all(self._specs, params, self.kind)
         full = {**self.defaults(), **given}
         P.check_table_shapes(self.kind, full)
-        c_params = P.new_struct(P.BLOCKS[self.kind][2])
-        c_params[0] = getattr(lib, P.BLOCKS[self.kind][3])()
-        P.write_struct(P.BLOCKS[self.kind][0], full, c_params)
+        specs, _, ctype, default_fn = P.BLOCKS[self.kind]
+        c_params = P.new_struct(ctype)
+        c_params[0] = getattr(lib, default_fn)()
+        P.write_struct(specs, full, c_params)
         c_block = ffi.new(self._ctype + " *")
         err = ffi.new("gs_error *")
         status = self._init(c_block, c_params, err)
@@ -60,7 +62,7 @@ class Block:
     @classmethod
     def units(cls) -> dict[str, str]:
         """SI unit (pint syntax, "" = dimensionless) of each numeric parameter."""
-        return {p.name: p.unit for p in cls._specs.values() if p.kind not in (P.OPTION, P.BOOL)}
+        return P.units_of(cls._specs.values())
 
     @property
     def params(self) -> dict[str, Any]:
@@ -141,12 +143,14 @@ def _temperature_in(c_in: Any, temperature: float | None) -> None:
         c_in.use_temperature_input = 1
 
 
-def _check_finite(**values: float | None) -> None:
-    for name, value in values.items():
+def _check_step(dt: float, **values: float | None) -> None:
+    """The inputs of a block step: dt and each value finite (None = not given),
+    then dt > 0; the first bad one is named."""
+    for name, value in {"dt": dt, **values}.items():
         if value is not None and not math.isfinite(value):
-            from .errors import InputError
-
             raise InputError(f"must be finite, got {value!r}", parameter=name)
+    if not dt > 0:
+        raise InputError(f"must be > 0, got {dt!r}", parameter="dt")
 
 
 class SimpleGear(Block):
@@ -183,18 +187,14 @@ class SimpleGear(Block):
         follower_speed, mesh_loss_torque, mesh_loss_power, loss_power (W),
         temperature (K), backlash_position (m), contact_force (N).
         """
-        _check_finite(
-            dt=dt,
+        _check_step(
+            dt,
             base_speed=base_speed,
             follower_torque=follower_torque,
             follower_speed=follower_speed,
             heat_flow=heat_flow,
             temperature=temperature,
         )
-        if not dt > 0:
-            from .errors import InputError
-
-            raise InputError(f"must be > 0, got {dt!r}", parameter="dt")
         c_in = ffi.new("gs_gear_ports_in *")
         c_in.base_speed_rad_s = base_speed
         c_in.follower_speed_rad_s = follower_speed
@@ -254,18 +254,14 @@ class RackPinion(Block):
         mesh_loss_force (N), mesh_loss_power, loss_power (W), temperature (K),
         backlash_position (m), contact_force (N).
         """
-        _check_finite(
-            dt=dt,
+        _check_step(
+            dt,
             pinion_speed=pinion_speed,
             rack_force=rack_force,
             rack_velocity=rack_velocity,
             heat_flow=heat_flow,
             temperature=temperature,
         )
-        if not dt > 0:
-            from .errors import InputError
-
-            raise InputError(f"must be > 0, got {dt!r}", parameter="dt")
         c_in = ffi.new("gs_rack_ports_in *")
         c_in.pinion_speed_rad_s = pinion_speed
         c_in.rack_velocity_m_s = rack_velocity
@@ -295,8 +291,6 @@ def make_block(block: str, params: Mapping[str, Any] | None = None) -> Block:
     try:
         cls = BLOCK_CLASSES[block]
     except (KeyError, TypeError):
-        from .errors import ModelFileError
-
         raise ModelFileError(
             f"unknown block {block!r}; expected 'simple_gear' or 'rack_pinion'", parameter="block"
         ) from None

@@ -112,7 +112,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _bad_input_types() -> tuple[type[BaseException], ...]:
-    from .errors import GearsimError, InputError, ModelFileError, ParameterError
+    from .errors import InputError, ModelFileError, ParameterError
 
     out: list[type[BaseException]] = [ModelFileError, ParameterError, InputError]
     try:
@@ -121,7 +121,6 @@ def _bad_input_types() -> tuple[type[BaseException], ...]:
         out += [MeasurementError, EffectError]
     except ImportError:  # pragma: no cover
         pass
-    del GearsimError
     return tuple(out)
 
 

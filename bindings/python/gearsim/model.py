@@ -98,7 +98,6 @@ class Model:
         Rig(block_obj, **given_rig)
         self.block: str = block
         self._block_obj = block_obj
-        self._block_params = block_obj.given_params
         self._rig_params = given_rig
 
     # -- parameters ----------------------------------------------------------------
@@ -124,7 +123,7 @@ class Model:
 
     def make_block(self) -> Block:
         """The block (a SimpleGear or RackPinion) with these parameters."""
-        return make_block(self.block, self._block_params)
+        return make_block(self.block, self.block_params)
 
     def replace(
         self,
@@ -134,7 +133,7 @@ class Model:
     ) -> Model:
         """A new model with parameters changed (merged into the given ones); a
         value of None removes the parameter (back to its default)."""
-        new_block = {**self._block_params, **(block_params or {})}
+        new_block = {**self.block_params, **(block_params or {})}
         new_rig = {**self._rig_params, **(rig_params or {})}
         return Model(
             self.block,

@@ -13,7 +13,7 @@ types, table capacity, and the lengths of tables that share one C count
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from numbers import Integral, Real
 from typing import Any
@@ -162,6 +162,54 @@ def _backlash(with_base_radius: bool) -> tuple[Param, ...]:
     return tuple(params)
 
 
+# The groups below mean the same in both blocks (same name, unit and C field in
+# gs_simple_gear_params and gs_rack_pinion_params), so each is declared once.
+
+
+def _mesh_loss(friction_options: tuple[tuple[str, str], ...]) -> tuple[Param, ...]:
+    """friction_model (the block's own list of models), loss_smoothing, efficiency_const."""
+    return (
+        Param(
+            "friction_model",
+            OPTION,
+            field="friction_model",
+            options=friction_options,
+            doc="meshing-loss model",
+        ),
+        Param(
+            "loss_smoothing",
+            OPTION,
+            field="loss_smoothing",
+            options=_SMOOTHING,
+            doc="power-threshold smoothing law",
+        ),
+        Param("efficiency_const", REAL, "", "efficiency_const", doc="constant efficiency"),
+    )
+
+
+# The temperature-dependent efficiency table: efficiency_vector has no C count of
+# its own, it shares temperature_count.
+_TEMPERATURE_TABLE = (
+    Param(
+        "temperature_vector",
+        VECTOR,
+        "K",
+        "temperature_vector_K",
+        "temperature_count",
+        doc="temperature breakpoints",
+    ),
+    Param(
+        "efficiency_vector", VECTOR, "", "efficiency_vector", doc="efficiency at each temperature"
+    ),
+)
+
+# The thermal port.
+_THERMAL = (
+    Param("thermal_mass", REAL, "J/K", "thermal_mass_J_K", doc="thermal mass"),
+    Param("initial_temperature", REAL, "K", "initial_temperature_K", doc="initial temperature"),
+)
+
+
 SIMPLE_GEAR_PARAMS: tuple[Param, ...] = (
     Param("teeth_ratio", REAL, "", "teeth_ratio", doc="follower-to-base teeth ratio N_F/N_B"),
     Param(
@@ -171,21 +219,7 @@ SIMPLE_GEAR_PARAMS: tuple[Param, ...] = (
         options=(("same", "GS_ROTATES_SAME"), ("opposite", "GS_ROTATES_OPPOSITE")),
         doc="follower rotation relative to the base",
     ),
-    Param(
-        "friction_model",
-        OPTION,
-        field="friction_model",
-        options=_FRICTION_SG,
-        doc="meshing-loss model",
-    ),
-    Param(
-        "loss_smoothing",
-        OPTION,
-        field="loss_smoothing",
-        options=_SMOOTHING,
-        doc="power-threshold smoothing law",
-    ),
-    Param("efficiency_const", REAL, "", "efficiency_const", doc="constant efficiency"),
+    *_mesh_loss(_FRICTION_SG),
     Param("power_threshold", REAL, "W", "power_threshold_W", doc="follower power threshold"),
     Param("idle_torque", REAL, "N*m", "idle_torque_Nm", doc="input shaft torque at no load"),
     Param(
@@ -209,17 +243,7 @@ SIMPLE_GEAR_PARAMS: tuple[Param, ...] = (
         "speed_threshold_rad_s",
         doc="follower angular velocity threshold",
     ),
-    Param(
-        "temperature_vector",
-        VECTOR,
-        "K",
-        "temperature_vector_K",
-        "temperature_count",
-        doc="temperature breakpoints",
-    ),
-    Param(
-        "efficiency_vector", VECTOR, "", "efficiency_vector", doc="efficiency at each temperature"
-    ),
+    *_TEMPERATURE_TABLE,
     Param(
         "load_vector",
         VECTOR,
@@ -243,8 +267,7 @@ SIMPLE_GEAR_PARAMS: tuple[Param, ...] = (
         "viscous_coefficients",
         doc="viscous coefficients [mu_B, mu_F]",
     ),
-    Param("thermal_mass", REAL, "J/K", "thermal_mass_J_K", doc="thermal mass"),
-    Param("initial_temperature", REAL, "K", "initial_temperature_K", doc="initial temperature"),
+    *_THERMAL,
 )
 
 RACK_PINION_PARAMS: tuple[Param, ...] = (
@@ -268,32 +291,8 @@ RACK_PINION_PARAMS: tuple[Param, ...] = (
         options=(("positive", "GS_RACK_POSITIVE"), ("negative", "GS_RACK_NEGATIVE")),
         doc="rack direction for positive pinion rotation",
     ),
-    Param(
-        "friction_model",
-        OPTION,
-        field="friction_model",
-        options=_FRICTION_RP,
-        doc="meshing-loss model",
-    ),
-    Param(
-        "loss_smoothing",
-        OPTION,
-        field="loss_smoothing",
-        options=_SMOOTHING,
-        doc="power-threshold smoothing law",
-    ),
-    Param("efficiency_const", REAL, "", "efficiency_const", doc="constant efficiency"),
-    Param(
-        "temperature_vector",
-        VECTOR,
-        "K",
-        "temperature_vector_K",
-        "temperature_count",
-        doc="temperature breakpoints",
-    ),
-    Param(
-        "efficiency_vector", VECTOR, "", "efficiency_vector", doc="efficiency at each temperature"
-    ),
+    *_mesh_loss(_FRICTION_RP),
+    *_TEMPERATURE_TABLE,
     Param("power_threshold", REAL, "W", "power_threshold_W", doc="rack power threshold"),
     Param(
         "pinion_viscous_coefficient",
@@ -309,8 +308,7 @@ RACK_PINION_PARAMS: tuple[Param, ...] = (
         "rack_viscous_coefficient",
         doc="rack viscous coefficient",
     ),
-    Param("thermal_mass", REAL, "J/K", "thermal_mass_J_K", doc="thermal mass"),
-    Param("initial_temperature", REAL, "K", "initial_temperature_K", doc="initial temperature"),
+    *_THERMAL,
     *_backlash(with_base_radius=False),
 )
 
@@ -419,10 +417,15 @@ BLOCKS: dict[str, tuple[tuple[Param, ...], tuple[Param, ...], str, str]] = {
 }
 
 
+def units_of(specs: Iterable[Param]) -> dict[str, str]:
+    """Parameter name -> SI unit (pint syntax) of the numeric parameters of specs."""
+    return {p.name: p.unit for p in specs if p.kind not in (OPTION, BOOL, INT)}
+
+
 def param_units(block: str) -> dict[str, str]:
     """Parameter name -> SI unit (pint syntax) of a block's block and rig parameters."""
     block_specs, rig_specs, _, _ = BLOCKS[block]
-    return {p.name: p.unit for p in (*block_specs, *rig_specs) if p.kind not in (OPTION, BOOL, INT)}
+    return units_of((*block_specs, *rig_specs))
 
 
 # ---------------------------------------------------------------- conversion
@@ -609,9 +612,7 @@ def read_struct(specs: Sequence[Param], struct: Any) -> dict[str, Any]:
         if not p.field:
             continue
         raw = _get_field(struct, p.field)
-        if p.kind == REAL:
-            out[p.name] = float(raw)
-        elif p.kind == OPTIONAL_REAL:
+        if p.kind in (REAL, OPTIONAL_REAL):
             out[p.name] = float(raw)
         elif p.kind == BOOL:
             out[p.name] = bool(raw)

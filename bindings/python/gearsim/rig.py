@@ -221,8 +221,11 @@ class Rig:
             status = lib.gs_rig_init_gear(rig, block._c_params, c_params, err)
         else:
             status = lib.gs_rig_init_rack(rig, block._c_params, c_params, err)
-        values = {**block.params, **full, "dt": dt_value}
-        check(status, err, rename=_c_rig_names(kind), value_of=values.__getitem__)
+
+        def value_of(name: str) -> Any:  # called by check() only on failure
+            return {**block.params, **full, "dt": dt_value}[name]
+
+        check(status, err, rename=_c_rig_names(kind), value_of=value_of)
         ambient = full["ambient_temperature"]
         if not (math.isfinite(ambient) and ambient > 0):
             raise ParameterError(
@@ -282,7 +285,7 @@ class Rig:
     @property
     def ambient_temperature(self) -> float:
         """Ambient temperature used when run/step get none (K)."""
-        return float(self._full["ambient_temperature"])
+        return self._ambient
 
     @property
     def params(self) -> dict[str, Any]:
@@ -520,10 +523,10 @@ def _stepper(rig: Any) -> tuple[Any, Any]:
 
 def _step_checked(stepper: Any, *values: Any) -> None:
     """Rig.step's slow path: convert and check each input in order, raising an
-    InputError that names the first bad one; step when all are good."""
+    InputError that names the first bad one; step when all are good (inputs
+    the fast path's conversion refused but float() takes, such as "1.5")."""
     good = [_finite(name, value) for name, value in zip(_STEP_INPUTS, values, strict=True)]
-    if _step_c(stepper, *good):  # pragma: no cover - _finite let only finite floats through
-        raise InputError("non-finite input", parameter=None)
+    _step_c(stepper, *good)  # all finite floats now: the shim steps and returns 0
 
 
 def _finite(name: str, value: Any) -> float:
