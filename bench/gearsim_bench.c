@@ -52,6 +52,7 @@
 static gs_rig_input g_tables[N_CONFIGS][PERIOD_SAMPLES];
 static gs_rig_output g_outputs[PERIOD_SAMPLES];
 
+/* The configuration called name, or NULL after saying it is unknown. */
 static const bench_config *find_config(const char *name)
 {
     for (size_t i = 0; i < N_CONFIGS; ++i) {
@@ -59,6 +60,7 @@ static const bench_config *find_config(const char *name)
             return &CONFIGS[i];
         }
     }
+    fprintf(stderr, "gearsim_bench: unknown configuration %s\n", name);
     return NULL;
 }
 
@@ -78,6 +80,17 @@ static int setup(const bench_config *c, gs_rig *rig)
         return -1;
     }
     return 0;
+}
+
+/* Looks up and sets up the configuration called name (the --count and --dump
+ * modes): 0, or the exit status (2 unknown name, 1 init failed). */
+static int setup_named(const char *name, gs_rig *rig, const bench_config **c)
+{
+    *c = find_config(name);
+    if (*c == NULL) {
+        return 2;
+    }
+    return setup(*c, rig) != 0 ? 1 : 0;
 }
 
 /* Checksum of everything a step returns that depends on the state. */
@@ -174,14 +187,11 @@ static stats summarise(double *ns, double *cpu, int runs)
 
 static int count_mode(const char *name, const char *mode, long steps)
 {
-    const bench_config *c = find_config(name);
-    if (c == NULL) {
-        fprintf(stderr, "gearsim_bench: unknown configuration %s\n", name);
-        return 2;
-    }
+    const bench_config *c;
     gs_rig rig;
-    if (setup(c, &rig) != 0) {
-        return 1;
+    const int status = setup_named(name, &rig, &c);
+    if (status != 0) {
+        return status;
     }
     const int batched = strcmp(mode, "run") == 0;
     if (!batched && strcmp(mode, "step") != 0) {
@@ -196,14 +206,11 @@ static int count_mode(const char *name, const char *mode, long steps)
 
 static int dump_mode(const char *name, long steps, const char *path)
 {
-    const bench_config *c = find_config(name);
-    if (c == NULL) {
-        fprintf(stderr, "gearsim_bench: unknown configuration %s\n", name);
-        return 2;
-    }
+    const bench_config *c;
     gs_rig rig;
-    if (setup(c, &rig) != 0) {
-        return 1;
+    const int status = setup_named(name, &rig, &c);
+    if (status != 0) {
+        return status;
     }
     FILE *f = fopen(path, "wb");
     if (f == NULL) {
@@ -261,7 +268,6 @@ int main(int argc, char **argv)
         } else if (strcmp(argv[i], "--config") == 0 && i + 1 < argc && n_selected < MAX_SELECTED) {
             const bench_config *c = find_config(argv[++i]);
             if (c == NULL) {
-                fprintf(stderr, "gearsim_bench: unknown configuration %s\n", argv[i]);
                 return 2;
             }
             selected[n_selected++] = c;

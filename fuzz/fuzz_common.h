@@ -85,6 +85,17 @@ static inline double fz_log_range(fz_reader *r, double lo, double hi)
     return lo * pow(hi / lo, fz_range(r, 0.0, 1.0));
 }
 
+/* FZ_VERBOSE is set in the environment: read once, as it is asked for every
+ * record and every step. */
+static inline int fz_verbose(void)
+{
+    static int verbose = -1;
+    if (verbose < 0) {
+        verbose = getenv("FZ_VERBOSE") != NULL;
+    }
+    return verbose;
+}
+
 static inline int fz_finite(gs_real x)
 {
     return isfinite(x) != 0;
@@ -238,7 +249,7 @@ static inline void fz_patch(fz_reader *r, void *base, const fz_field *fields, si
     fz_bytes(r, payload, sizeof payload);
     const fz_field *f = &fields[which % nfields];
     unsigned char *dst = (unsigned char *)base + f->offset;
-    const int verbose = getenv("FZ_VERBOSE") != NULL;
+    const int verbose = fz_verbose();
     if (f->kind == FZ_REAL) {
         const gs_real v = fz_real(mode, payload);
         memcpy(dst + (size_t)(elem % (unsigned)f->count) * sizeof(gs_real), &v, sizeof v);

@@ -273,6 +273,5 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         break;
     }
     }
-    (void)envelope;
     return 0;
 }

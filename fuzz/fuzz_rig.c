@@ -41,11 +41,6 @@ typedef struct {
     double r_follow;
 } rig_info;
 
-static double pick_log(fz_reader *r, double lo, double hi)
-{
-    return fz_log_range(r, lo, hi);
-}
-
 /* Strictly increasing table of n breakpoints from lo with steps in [0.1, 50]. */
 static void table_x(fz_reader *r, gs_real *x, int n, double lo)
 {
@@ -65,40 +60,40 @@ static void set_backlash(fz_reader *r, gs_backlash_params *b, uint8_t cfg, int g
 {
     b->enabled = 1;
     b->hard_stop_model = (gs_hard_stop_model)(cfg % 3U);
-    b->linear_backlash_m = (gs_real)pick_log(r, 1e-6, 1e-2);
+    b->linear_backlash_m = (gs_real)fz_log_range(r, 1e-6, 1e-2);
     if (gear) {
-        b->base_radius_m = (gs_real)pick_log(r, 1e-3, 1.0);
+        b->base_radius_m = (gs_real)fz_log_range(r, 1e-3, 1.0);
     }
     b->transition_region_m = (gs_real)((double)b->linear_backlash_m * fz_log_range(r, 1e-3, 0.5));
-    b->stiffness_N_m = (gs_real)pick_log(r, 1e3, 1e9);
-    b->damping_N_s_m = (fz_u8(r) & 7U) == 0 ? (gs_real)0.0 : (gs_real)pick_log(r, 1e-2, 1e5);
+    b->stiffness_N_m = (gs_real)fz_log_range(r, 1e3, 1e9);
+    b->damping_N_s_m = (fz_u8(r) & 7U) == 0 ? (gs_real)0.0 : (gs_real)fz_log_range(r, 1e-2, 1e5);
     b->initial_position_m = (gs_real)(0.5 * (double)b->linear_backlash_m * fz_range(r, -1.0, 1.0));
     b->no_pull = (cfg >> 2) & 1U;
     b->lock_enabled = (cfg >> 3) & 1U;
-    b->contact_speed_threshold_m_s = (gs_real)pick_log(r, 1e-6, 1e-1);
-    b->contact_release_force_N = (fz_u8(r) & 3U) == 0 ? (gs_real)0.0 : (gs_real)pick_log(r, 1e-3, 1e3);
+    b->contact_speed_threshold_m_s = (gs_real)fz_log_range(r, 1e-6, 1e-1);
+    b->contact_release_force_N = (fz_u8(r) & 3U) == 0 ? (gs_real)0.0 : (gs_real)fz_log_range(r, 1e-3, 1e3);
 }
 
 static gs_status build(fz_reader *r, gs_rig *rig, rig_info *info)
 {
     const uint8_t c0 = fz_u8(r), c1 = fz_u8(r), c2 = fz_u8(r), c3 = fz_u8(r);
     gs_rig_params rp = gs_rig_params_default();
-    rp.dt_s = (gs_real)pick_log(r, 1e-5, 1e-2);
+    rp.dt_s = (gs_real)fz_log_range(r, 1e-5, 1e-2);
     rp.base_drive = (c0 & 2U) ? GS_BASE_TORQUE_DRIVEN : GS_BASE_SPEED_DRIVEN;
     rp.base_inertia_kg_m2 = (rp.base_drive == GS_BASE_TORQUE_DRIVEN || (c2 & 1U))
-                                ? (gs_real)pick_log(r, 1e-6, 1e1) : (gs_real)0.0;
+                                ? (gs_real)fz_log_range(r, 1e-6, 1e1) : (gs_real)0.0;
     rp.initial_base_speed_rad_s = (gs_real)fz_range(r, -100.0, 100.0);
-    rp.driven_inertia = (gs_real)pick_log(r, 1e-6, 1e2);
-    rp.load_coulomb_friction = (c2 & 2U) ? (gs_real)pick_log(r, 1e-3, 1e2) : (gs_real)0.0;
-    rp.load_coulomb_speed_threshold = (gs_real)pick_log(r, 1e-4, 1.0);
+    rp.driven_inertia = (gs_real)fz_log_range(r, 1e-6, 1e2);
+    rp.load_coulomb_friction = (c2 & 2U) ? (gs_real)fz_log_range(r, 1e-3, 1e2) : (gs_real)0.0;
+    rp.load_coulomb_speed_threshold = (gs_real)fz_log_range(r, 1e-4, 1.0);
     rp.load_offset = (gs_real)fz_range(r, -10.0, 10.0);
     rp.heat_path = (c2 >> 2) & 1U;
-    rp.thermal_resistance_K_W = (gs_real)pick_log(r, 1e-2, 1e2);
+    rp.thermal_resistance_K_W = (gs_real)fz_log_range(r, 1e-2, 1e2);
     rp.temperature_source = (c2 & 8U) ? GS_TEMPERATURE_FROM_INPUT : GS_TEMPERATURE_FROM_MODEL;
-    rp.accel_filter_time_constant_s = (c2 & 16U) ? (gs_real)pick_log(r, 1e-4, 1e-1) : (gs_real)0.0;
+    rp.accel_filter_time_constant_s = (c2 & 16U) ? (gs_real)fz_log_range(r, 1e-4, 1e-1) : (gs_real)0.0;
     rp.contact_substeps = (c2 & 32U) ? (int)(fz_u8(r) % (GS_MAX_SUBSTEPS + 1)) : 0;
     const gs_loss_smoothing smoothing = (c0 & 8U) ? GS_SMOOTHING_SIMSCAPE : GS_SMOOTHING_PASSIVE;
-    const double thermal_mass = pick_log(r, 1e-6, 1e3);
+    const double thermal_mass = fz_log_range(r, 1e-6, 1e3);
     info->gear = !(c0 & 1U);
     info->backlash = (c0 >> 2) & 1U;
     info->passive = smoothing == GS_SMOOTHING_PASSIVE;
@@ -107,19 +102,19 @@ static gs_status build(fz_reader *r, gs_rig *rig, rig_info *info)
     gs_status st;
     if (info->gear) {
         gs_simple_gear_params g = gs_simple_gear_params_default();
-        g.teeth_ratio = (gs_real)pick_log(r, 1e-3, 1e3);
+        g.teeth_ratio = (gs_real)fz_log_range(r, 1e-3, 1e3);
         g.output_shaft_rotates = (c0 & 16U) ? GS_ROTATES_SAME : GS_ROTATES_OPPOSITE;
         g.friction_model = (gs_friction_model)(c1 % 5U);
         g.loss_smoothing = smoothing;
         g.efficiency_const = eff(r);
-        g.power_threshold_W = (gs_real)pick_log(r, 1e-6, 1e2);
-        g.nominal_output_torque_Nm = (gs_real)pick_log(r, 1e-2, 1e3);
+        g.power_threshold_W = (gs_real)fz_log_range(r, 1e-6, 1e2);
+        g.nominal_output_torque_Nm = (gs_real)fz_log_range(r, 1e-2, 1e3);
         g.efficiency_nominal = (gs_real)fz_range(r, 0.3, 0.99);
         /* idle torque within the k >= 0 limit of eq. 2.5 */
         const double k_max = (1.0 / (double)g.efficiency_nominal - 1.0) * (double)g.nominal_output_torque_Nm
                              / (double)g.teeth_ratio;
         g.idle_torque_Nm = (gs_real)(0.999 * k_max * fz_range(r, 0.0, 1.0));
-        g.speed_threshold_rad_s = (gs_real)pick_log(r, 1e-4, 1.0);
+        g.speed_threshold_rad_s = (gs_real)fz_log_range(r, 1e-4, 1.0);
         g.temperature_count = 2 + (int)((c1 >> 3) % (GS_TABLE_MAX - 1));
         g.load_count = 2 + (int)((c3 >> 4) % (GS_TABLE_MAX - 1));
         table_x(r, g.temperature_vector_K, g.temperature_count, fz_range(r, 200.0, 300.0));
@@ -130,8 +125,8 @@ static gs_status build(fz_reader *r, gs_rig *rig, rig_info *info)
                 g.efficiency_matrix[i][j] = eff(r);
             }
         }
-        g.viscous_coefficients[0] = (c3 & 1U) ? (gs_real)pick_log(r, 1e-6, 1.0) : (gs_real)0.0;
-        g.viscous_coefficients[1] = (c3 & 2U) ? (gs_real)pick_log(r, 1e-6, 1.0) : (gs_real)0.0;
+        g.viscous_coefficients[0] = (c3 & 1U) ? (gs_real)fz_log_range(r, 1e-6, 1.0) : (gs_real)0.0;
+        g.viscous_coefficients[1] = (c3 & 2U) ? (gs_real)fz_log_range(r, 1e-6, 1.0) : (gs_real)0.0;
         g.thermal_mass_J_K = (gs_real)thermal_mass;
         g.initial_temperature_K = (gs_real)fz_range(r, 250.0, 350.0);
         if (info->backlash) {
@@ -139,9 +134,8 @@ static gs_status build(fz_reader *r, gs_rig *rig, rig_info *info)
         }
         info->friction = g.friction_model;
         st = gs_rig_init_gear(rig, &g, &rp, &err);
-        if (getenv("FZ_VERBOSE") != NULL) {
+        if (fz_verbose()) {
             fz_dump("gear", &g, fz_gear_fields, FZ_COUNT(fz_gear_fields));
-            fz_dump("rp", &rp, fz_rig_fields, FZ_COUNT(fz_rig_fields));
         }
         info->r_base = (double)g.backlash.base_radius_m;
         info->r_follow = (double)g.teeth_ratio * (double)g.backlash.base_radius_m;
@@ -150,9 +144,9 @@ static gs_status build(fz_reader *r, gs_rig *rig, rig_info *info)
                                                          GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY};
         gs_rack_pinion_params k = gs_rack_pinion_params_default();
         k.parameterization = (c0 & 16U) ? GS_PARAMETERIZE_TOOTH_PARAMETERS : GS_PARAMETERIZE_PINION_RADIUS;
-        k.pinion_radius_m = (gs_real)pick_log(r, 1e-3, 1.0);
+        k.pinion_radius_m = (gs_real)fz_log_range(r, 1e-3, 1.0);
         k.teeth_count = (gs_real)(5 + fz_u8(r) % 100U);
-        k.spacing_m = (gs_real)pick_log(r, 1e-4, 1e-2);
+        k.spacing_m = (gs_real)fz_log_range(r, 1e-4, 1e-2);
         k.rack_directionality = (c0 & 32U) ? GS_RACK_NEGATIVE : GS_RACK_POSITIVE;
         k.friction_model = rack_models[c1 % 3U];
         k.loss_smoothing = smoothing;
@@ -162,9 +156,9 @@ static gs_status build(fz_reader *r, gs_rig *rig, rig_info *info)
         for (int i = 0; i < k.temperature_count; ++i) {
             k.efficiency_vector[i] = eff(r);
         }
-        k.power_threshold_W = (gs_real)pick_log(r, 1e-6, 1e2);
-        k.pinion_viscous_coefficient = (c3 & 1U) ? (gs_real)pick_log(r, 1e-6, 1.0) : (gs_real)0.0;
-        k.rack_viscous_coefficient = (c3 & 2U) ? (gs_real)pick_log(r, 1e-4, 1e2) : (gs_real)0.0;
+        k.power_threshold_W = (gs_real)fz_log_range(r, 1e-6, 1e2);
+        k.pinion_viscous_coefficient = (c3 & 1U) ? (gs_real)fz_log_range(r, 1e-6, 1.0) : (gs_real)0.0;
+        k.rack_viscous_coefficient = (c3 & 2U) ? (gs_real)fz_log_range(r, 1e-4, 1e2) : (gs_real)0.0;
         k.thermal_mass_J_K = (gs_real)thermal_mass;
         k.initial_temperature_K = (gs_real)fz_range(r, 250.0, 350.0);
         if (info->backlash) {
@@ -172,15 +166,17 @@ static gs_status build(fz_reader *r, gs_rig *rig, rig_info *info)
         }
         info->friction = k.friction_model;
         st = gs_rig_init_rack(rig, &k, &rp, &err);
-        if (getenv("FZ_VERBOSE") != NULL) {
+        if (fz_verbose()) {
             fz_dump("rack", &k, fz_rack_fields, FZ_COUNT(fz_rack_fields));
-            fz_dump("rp", &rp, fz_rig_fields, FZ_COUNT(fz_rig_fields));
         }
         info->r_base = (double)gs_rack_pinion_radius(&k);
         info->r_follow = 1.0;
     }
+    if (fz_verbose()) {
+        fz_dump("rp", &rp, fz_rig_fields, FZ_COUNT(fz_rig_fields));
+    }
     FZ_CHECK(st == GS_OK, "generated parameters rejected: %s: %s", err.parameter, err.message);
-    if (getenv("FZ_VERBOSE") != NULL) {
+    if (fz_verbose()) {
         const gs_mesh_ *m = &rig->mesh;
         fprintf(stderr,
                 "rig: %s, %s-driven, friction %d (%s), backlash %d (hard stop %d, no_pull %d, lock %d), "
@@ -245,9 +241,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
      * light side), the impulse balance loses its significant digits: known
      * limit L2 (docs/hardening.md). Without -DFZ_STRICT such rigs are still
      * stepped (no crash, no UB) but their outputs are not checked. */
-    const double h_sub0 = dt / (double)rig.substeps;
-    const double kappa = info.backlash ? h_sub0 * (double)rig.inv_eff_mass_contact
-                                             * ((double)rig.mesh.stiffness * h_sub0 + (double)rig.mesh.damping)
+    const double h_sub = dt / (double)rig.substeps;
+    const double kappa = info.backlash ? h_sub * (double)rig.inv_eff_mass_contact
+                                             * ((double)rig.mesh.stiffness * h_sub + (double)rig.mesh.damping)
                                        : 0.0;
     const int checked = FZ_STRICT_ENERGY || kappa * eps <= 1e-4;
     gs_rig shadow = rig;
@@ -265,7 +261,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         in->measured_temperature_K = input_value(&r, 1.0, 1e3);
         gs_rig_output *o = &outputs[k];
         gs_rig_step(&rig, in, o);
-        if (getenv("FZ_VERBOSE") != NULL) {
+        if (fz_verbose()) {
             fprintf(stderr, "step %d in: w_B %.17g tau_m %.17g load %.17g T_amb %.17g T_meas %.17g\n  out:", k,
                     (double)in->base_speed_rad_s, (double)in->base_torque_Nm, (double)in->load,
                     (double)in->ambient_temperature_K, (double)in->measured_temperature_K);
@@ -298,7 +294,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
          * on a light side those are much larger than the step's speeds, and
          * their rounding multiplies the contact force. */
         const double f_abs = fabs((double)o->contact_force_N);
-        const double h_sub = dt / (double)rig.substeps;
         const double f_ext = (fabs((double)in->load) + fabs((double)rig.load_offset) + (double)rig.load_coulomb)
                                  / info.r_follow
                              + (rig.base_drive == GS_BASE_TORQUE_DRIVEN ? fabs((double)in->base_torque_Nm) / info.r_base

@@ -13,6 +13,9 @@
  */
 #include "test_common.h"
 
+static const gs_hard_stop_model hard_stop_models[3] = {
+    GS_HARD_STOP_SMOOTH, GS_HARD_STOP_FULL_UNDAMPED, GS_HARD_STOP_FULL_DAMPED};
+
 static double cubic_step(double xi)
 {
     return xi * xi * (3.0 - 2.0 * xi);
@@ -134,14 +137,25 @@ static void run_block_contact(gs_hard_stop_model m, int no_pull, int lower)
 
 static void test_block_contact_laws(void **state)
 {
-    const gs_hard_stop_model models[3] = {GS_HARD_STOP_SMOOTH, GS_HARD_STOP_FULL_UNDAMPED,
-                                          GS_HARD_STOP_FULL_DAMPED};
     int m, np, lower;
     (void)state;
     for (m = 0; m < 3; ++m)
         for (np = 0; np < 2; ++np)
             for (lower = 0; lower < 2; ++lower)
-                run_block_contact(models[m], np, lower);
+                run_block_contact(hard_stop_models[m], np, lower);
+}
+
+/* Contact, first seen in step k_contact (1-based), starts in that step, i.e.
+ * t_contact lies in ((k_contact - 1)*dt, k_contact*dt]. */
+static void assert_contact_step(const char *what, int k_contact, double dt, double t_contact)
+{
+    if (k_contact < 0)
+        fail_msg("%s: no contact within 400 steps (expected at %.4f s)", what, t_contact);
+    if (!(k_contact * dt >= t_contact - 1e-9 && (k_contact - 1) * dt <= t_contact + dt)) {
+        print_error("%s: contact in step %d (t = %.4f s), expected %.4f s = (b/2)/(r_B*omega_B)\n",
+                    what, k_contact, k_contact * dt, t_contact);
+        fail();
+    }
 }
 
 /* ---- Rig: lost motion. The base turns at constant speed, the follower rests
@@ -198,15 +212,7 @@ static void test_lost_motion_gear(void **state)
             }
             x_prev = (double)out.backlash_position_m;
         }
-        if (k_contact < 0)
-            fail_msg("no contact within 400 steps (expected at %.4f s)", t_contact);
-        /* contact starts during step k_contact, i.e. in ((k-1)*dt, k*dt] */
-        if (!(k_contact * dt >= t_contact - 1e-9 && (k_contact - 1) * dt <= t_contact + dt)) {
-            print_error("lost motion: contact in step %d (t = %.4f s), expected %.4f s = "
-                        "(b/2)/(r_B*omega_B)\n",
-                        k_contact, k_contact * dt, t_contact);
-            fail();
-        }
+        assert_contact_step("lost motion", k_contact, dt, t_contact);
         /* afterwards the base carries the follower: omega_F = s*omega_B/g */
         ASSERT_NEAR(out.driven_speed, s * wB / g, 1e-3, 0.0);
         assert_true((double)out.backlash_position_m > b / 2.0 - 1e-5);
@@ -254,12 +260,7 @@ static void test_lost_motion_rack(void **state)
                 (!is_zero((double)out.contact_force_N) || !is_zero((double)out.driven_speed)))
                 k_contact = k;
         }
-        assert_true(k_contact > 0);
-        if (!(k_contact * dt >= t_contact - 1e-9 && (k_contact - 1) * dt <= t_contact + dt)) {
-            print_error("rack lost motion: contact in step %d, expected at %.4f s\n", k_contact,
-                        t_contact);
-            fail();
-        }
+        assert_contact_step("rack lost motion", k_contact, dt, t_contact);
         ASSERT_NEAR(out.driven_speed, rack_sign(dirs[id]) * r * wP, 1e-3, 0.0);
     }
 }
@@ -344,13 +345,11 @@ static impact_result impact(gs_hard_stop_model m, double D, int no_pull, int sub
 
 static void test_rebound_conservative(void **state)
 {
-    const gs_hard_stop_model models[3] = {GS_HARD_STOP_SMOOTH, GS_HARD_STOP_FULL_UNDAMPED,
-                                          GS_HARD_STOP_FULL_DAMPED};
     int m;
     (void)state;
     for (m = 0; m < 3; ++m) {
-        const impact_result r = impact(models[m], 0.0, 1, 64, 200);
-        print_message("hard stop %d, D = 0: rebound/impact speed = %.6f\n", (int)models[m],
+        const impact_result r = impact(hard_stop_models[m], 0.0, 1, 64, 200);
+        print_message("hard stop %d, D = 0: rebound/impact speed = %.6f\n", (int)hard_stop_models[m],
                       r.ratio);
         assert_true(r.ratio > 0.97);
         ASSERT_LE(r.ratio, 1.0, 1e-6);

@@ -151,45 +151,22 @@ static inline void report_init_failure(const char *what, gs_status st, const gs_
     _fail(file, line);
 }
 
-#define INIT_GEAR_RIG(rig, gp, rp)                                                  \
-    do {                                                                            \
-        gs_error err_;                                                              \
-        gs_status st_;                                                              \
-        memset(&err_, 0, sizeof err_);                                              \
-        st_ = gs_rig_init_gear((rig), (gp), (rp), &err_);                           \
-        if (st_ != GS_OK)                                                           \
-            report_init_failure("gs_rig_init_gear", st_, &err_, __FILE__, __LINE__); \
+/* Calls an init function (its gs_error * last) and fails the test, naming
+ * the reported parameter, unless it returns GS_OK. */
+#define INIT_OK(init, ...)                                                \
+    do {                                                                  \
+        gs_error err_;                                                    \
+        gs_status st_;                                                    \
+        memset(&err_, 0, sizeof err_);                                    \
+        st_ = init(__VA_ARGS__, &err_);                                   \
+        if (st_ != GS_OK)                                                 \
+            report_init_failure(#init, st_, &err_, __FILE__, __LINE__);   \
     } while (0)
 
-#define INIT_RACK_RIG(rig, pp, rp)                                                  \
-    do {                                                                            \
-        gs_error err_;                                                              \
-        gs_status st_;                                                              \
-        memset(&err_, 0, sizeof err_);                                              \
-        st_ = gs_rig_init_rack((rig), (pp), (rp), &err_);                           \
-        if (st_ != GS_OK)                                                           \
-            report_init_failure("gs_rig_init_rack", st_, &err_, __FILE__, __LINE__); \
-    } while (0)
-
-#define INIT_GEAR(gear, gp)                                                             \
-    do {                                                                                \
-        gs_error err_;                                                                  \
-        gs_status st_;                                                                  \
-        memset(&err_, 0, sizeof err_);                                                  \
-        st_ = gs_simple_gear_init((gear), (gp), &err_);                                 \
-        if (st_ != GS_OK)                                                               \
-            report_init_failure("gs_simple_gear_init", st_, &err_, __FILE__, __LINE__); \
-    } while (0)
-
-#define INIT_RACK(rp_, pp)                                                              \
-    do {                                                                                \
-        gs_error err_;                                                                  \
-        gs_status st_;                                                                  \
-        memset(&err_, 0, sizeof err_);                                                  \
-        st_ = gs_rack_pinion_init((rp_), (pp), &err_);                                  \
-        if (st_ != GS_OK)                                                               \
-            report_init_failure("gs_rack_pinion_init", st_, &err_, __FILE__, __LINE__); \
-    } while (0)
+#define INIT_GEAR_RIG(rig, gp, rp) INIT_OK(gs_rig_init_gear, (rig), (gp), (rp))
+#define INIT_RACK_RIG(rig, pp, rp) INIT_OK(gs_rig_init_rack, (rig), (pp), (rp))
+#define INIT_GEAR(gear, gp) INIT_OK(gs_simple_gear_init, (gear), (gp))
+#define INIT_RACK(rp_, pp) INIT_OK(gs_rack_pinion_init, (rp_), (pp))
 
 static inline gs_rig_input rig_input_blank(void)
 {

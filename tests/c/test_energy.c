@@ -90,6 +90,13 @@ static void walk_next(test_rng *rng, walk *w, double base_max, double load_max, 
     w->load = rng_range(rng, -load_max, load_max) * (rng_unit(rng) < 0.25 ? 0.01 : 1.0);
 }
 
+/* The input of a speed- or torque-driven rig from the walk's values. */
+static gs_rig_input walk_input(gs_base_drive drive, const walk *w)
+{
+    return drive == GS_BASE_SPEED_DRIVEN ? rig_speed_input(w->base, w->load)
+                                         : rig_torque_input(w->base, w->load);
+}
+
 static void check_rigid_step(const gs_rig_output *o, gs_base_drive drive, int passive)
 {
     const double gross = fabs((double)o->base_port_torque_Nm * (double)o->base_speed_rad_s) +
@@ -126,8 +133,7 @@ static void run_random_rigid_gear(gs_friction_model fm, gs_output_rotation rot,
     for (k = 0; k < RIGID_STEPS; ++k) {
         gs_rig_input in;
         walk_next(&rng, &w, drive == GS_BASE_SPEED_DRIVEN ? 30.0 : 1.5, 8.0, 40);
-        in = drive == GS_BASE_SPEED_DRIVEN ? rig_speed_input(w.base, w.load)
-                                           : rig_torque_input(w.base, w.load);
+        in = walk_input(drive, &w);
         in.ambient_temperature_K = R(rng_range(&rng, 290.0, 310.0));
         gs_rig_step(&rig, &in, &out);
         check_rigid_step(&out, drive, sm == GS_SMOOTHING_PASSIVE);
@@ -136,20 +142,28 @@ static void run_random_rigid_gear(gs_friction_model fm, gs_output_rotation rot,
     assert_true(max_loss > 0.1); /* the scenario does dissipate */
 }
 
-static void test_random_rigid_gear_speed_driven(void **state)
+/* Every gear friction model with passive smoothing, both rotation senses;
+ * seeds seed_same + i and seed_opposite + i for model i. */
+static void run_random_rigid_gear_models(gs_base_drive drive, uint64_t seed_same,
+                                         uint64_t seed_opposite)
 {
-    const gs_friction_model fms[5] = {
+    static const gs_friction_model fms[5] = {
         GS_FRICTION_NONE, GS_FRICTION_CONSTANT_EFFICIENCY, GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY,
         GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY,
         GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY};
     int i;
-    (void)state;
     for (i = 0; i < 5; ++i) {
-        run_random_rigid_gear(fms[i], GS_ROTATES_SAME, GS_SMOOTHING_PASSIVE, GS_BASE_SPEED_DRIVEN,
-                              1000u + (uint64_t)i);
-        run_random_rigid_gear(fms[i], GS_ROTATES_OPPOSITE, GS_SMOOTHING_PASSIVE,
-                              GS_BASE_SPEED_DRIVEN, 2000u + (uint64_t)i);
+        run_random_rigid_gear(fms[i], GS_ROTATES_SAME, GS_SMOOTHING_PASSIVE, drive,
+                              seed_same + (uint64_t)i);
+        run_random_rigid_gear(fms[i], GS_ROTATES_OPPOSITE, GS_SMOOTHING_PASSIVE, drive,
+                              seed_opposite + (uint64_t)i);
     }
+}
+
+static void test_random_rigid_gear_speed_driven(void **state)
+{
+    (void)state;
+    run_random_rigid_gear_models(GS_BASE_SPEED_DRIVEN, 1000u, 2000u);
     /* Simscape smoothing: the balance still holds (loss may dip below 0) */
     run_random_rigid_gear(GS_FRICTION_CONSTANT_EFFICIENCY, GS_ROTATES_OPPOSITE,
                           GS_SMOOTHING_SIMSCAPE, GS_BASE_SPEED_DRIVEN, 3001u);
@@ -157,18 +171,8 @@ static void test_random_rigid_gear_speed_driven(void **state)
 
 static void test_random_rigid_gear_torque_driven(void **state)
 {
-    const gs_friction_model fms[5] = {
-        GS_FRICTION_NONE, GS_FRICTION_CONSTANT_EFFICIENCY, GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY,
-        GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY,
-        GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY};
-    int i;
     (void)state;
-    for (i = 0; i < 5; ++i) {
-        run_random_rigid_gear(fms[i], GS_ROTATES_SAME, GS_SMOOTHING_PASSIVE,
-                              GS_BASE_TORQUE_DRIVEN, 4000u + (uint64_t)i);
-        run_random_rigid_gear(fms[i], GS_ROTATES_OPPOSITE, GS_SMOOTHING_PASSIVE,
-                              GS_BASE_TORQUE_DRIVEN, 5000u + (uint64_t)i);
-    }
+    run_random_rigid_gear_models(GS_BASE_TORQUE_DRIVEN, 4000u, 5000u);
 }
 
 static void run_random_rigid_rack(gs_friction_model fm, gs_rack_direction dir, gs_base_drive drive,
@@ -198,8 +202,7 @@ static void run_random_rigid_rack(gs_friction_model fm, gs_rack_direction dir, g
     for (k = 0; k < RIGID_STEPS; ++k) {
         gs_rig_input in;
         walk_next(&rng, &w, drive == GS_BASE_SPEED_DRIVEN ? 30.0 : 1.5, 80.0, 40);
-        in = drive == GS_BASE_SPEED_DRIVEN ? rig_speed_input(w.base, w.load)
-                                           : rig_torque_input(w.base, w.load);
+        in = walk_input(drive, &w);
         gs_rig_step(&rig, &in, &out);
         check_rigid_step(&out, drive, 1);
         max_loss = dmax(max_loss, (double)out.loss_power_W);
@@ -251,6 +254,9 @@ static void check_backlash_step(const gs_rig_output *o, double e_prev, double f_
     }
 }
 
+static const gs_hard_stop_model hard_stop_models[3] = {
+    GS_HARD_STOP_SMOOTH, GS_HARD_STOP_FULL_UNDAMPED, GS_HARD_STOP_FULL_DAMPED};
+
 typedef struct {
     gs_hard_stop_model model;
     double damping;
@@ -276,7 +282,6 @@ static void run_random_backlash(backlash_case c, uint64_t seed)
              "%s rig, hard stop %d, D %g, no_pull %d, substeps %d, friction %d, %s-driven",
              c.rack ? "rack" : "gear", (int)c.model, c.damping, c.no_pull, c.substeps,
              (int)c.friction, c.drive == GS_BASE_SPEED_DRIVEN ? "speed" : "torque");
-    memset(&bl, 0, sizeof bl);
     bl = gs_simple_gear_params_default().backlash;
     bl.enabled = 1;
     bl.hard_stop_model = c.model;
@@ -321,8 +326,7 @@ static void run_random_backlash(backlash_case c, uint64_t seed)
         gs_rig_input in;
         walk_next(&rng, &w, c.drive == GS_BASE_SPEED_DRIVEN ? 20.0 : 0.8,
                   c.rack ? 40.0 : 2.0, 80);
-        in = c.drive == GS_BASE_SPEED_DRIVEN ? rig_speed_input(w.base, w.load)
-                                             : rig_torque_input(w.base, w.load);
+        in = walk_input(c.drive, &w);
         gs_rig_step(&rig, &in, &out);
         check_backlash_step(&out, e_prev, f_prev, dt, k, label);
         e_prev = (double)out.contact_energy_J;
@@ -337,8 +341,6 @@ static void run_random_backlash(backlash_case c, uint64_t seed)
  * integration itself does. */
 static void test_random_backlash_energy_contact(void **state)
 {
-    const gs_hard_stop_model models[3] = {GS_HARD_STOP_SMOOTH, GS_HARD_STOP_FULL_UNDAMPED,
-                                          GS_HARD_STOP_FULL_DAMPED};
     /* damping, no_pull, substeps (0 = automatic), drive */
     static const struct {
         double damping;
@@ -354,7 +356,7 @@ static void test_random_backlash_energy_contact(void **state)
         for (v = 0; v < 6; ++v) {
             for (rack = 0; rack < 2; ++rack) {
                 backlash_case c;
-                c.model = models[m];
+                c.model = hard_stop_models[m];
                 c.damping = variants[v].damping;
                 c.no_pull = variants[v].no_pull;
                 c.substeps = variants[v].substeps;
@@ -372,8 +374,6 @@ static void test_random_backlash_energy_contact(void **state)
  * that no step creates energy. */
 static void test_random_backlash_energy_mesh_loss(void **state)
 {
-    const gs_hard_stop_model models[3] = {GS_HARD_STOP_SMOOTH, GS_HARD_STOP_FULL_UNDAMPED,
-                                          GS_HARD_STOP_FULL_DAMPED};
     uint64_t seed = 9500u;
     int m, v, rack;
     (void)state;
@@ -381,7 +381,7 @@ static void test_random_backlash_energy_mesh_loss(void **state)
         for (v = 0; v < 3; ++v) {
             for (rack = 0; rack < 2; ++rack) {
                 backlash_case c;
-                c.model = models[m];
+                c.model = hard_stop_models[m];
                 c.damping = (v == 2) ? 0.0 : 300.0;
                 c.no_pull = 1;
                 c.substeps = (v == 2) ? 8 : 0;
