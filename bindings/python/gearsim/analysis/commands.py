@@ -124,13 +124,18 @@ def _emit_json(obj: dict) -> None:
     sys.stdout.flush()
 
 
-def _write_model_atomic(model: Any, path: str) -> None:
+def _out_dir(path: str) -> str:
+    """The directory a --out file goes to; exit 2 when it does not exist."""
     d = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(d):
         from ..errors import ModelFileError
 
         raise ModelFileError("the directory for --out does not exist", file=path)
-    tmp = os.path.join(d, f".{os.path.basename(path)}.tmp{os.getpid()}")
+    return d
+
+
+def _write_model_atomic(model: Any, path: str) -> None:
+    tmp = os.path.join(_out_dir(path), f".{os.path.basename(path)}.tmp{os.getpid()}")
     try:
         model.save(tmp)
         os.replace(tmp, path)
@@ -311,10 +316,8 @@ def _fit(args: argparse.Namespace) -> int:
     filt = _input_filter(args.input_filter)
     model, meas = _load(args)
     get_effect(args.add, model)  # unknown / inapplicable effect: exit 2 before any work
-    if args.out and not os.path.isdir(os.path.dirname(os.path.abspath(args.out))):
-        from ..errors import ModelFileError
-
-        raise ModelFileError("the directory for --out does not exist", file=args.out)
+    if args.out:
+        _out_dir(args.out)  # before the fit, not after minutes of work
     res = fit(model, meas, args.add, input_filter=filt, max_samples=args.max_samples, progress=say)
     if args.out:
         _write_model_atomic(res.model, args.out)

@@ -29,7 +29,7 @@ import numpy as np
 
 from . import modelkit as mk
 from .compare import CompareResult, compare
-from .effects import EFFECTS, Effect, applicable_effects, nuisance_columns
+from .effects import EFFECTS, Effect, applicable_effects, nuisance_columns, present_mesh_loss
 from .fitting import FitResult, fit_effect, screen_effect
 from .measurement import Measurement
 from .signatures import BacklashEvidence, Context, ScreenResult, build_context, screen
@@ -206,11 +206,7 @@ def _evidence_linear(ctx: Context, effect: Effect, sr: ScreenResult) -> dict[str
             f"the peak; largest in {regime}"
         )
     elif n == "temperature_dependent_efficiency":
-        L0 = (
-            1.0 - float(mk.block_values(ctx.model)["efficiency_const"])
-            if mk.friction_model(ctx.model) == "constant_efficiency"
-            else 0.0
-        )
+        L0 = present_mesh_loss(ctx.model)
         pts = []
         for name, c in own.items():
             pts.append(f"{1.0 - (L0 + c):.3f} at {name.split('@')[1]}")

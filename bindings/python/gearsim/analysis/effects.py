@@ -26,7 +26,7 @@ efficiency), so fitting the new effect alone would leave them biased.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -44,16 +44,6 @@ __all__ = [
     "coestimated",
     "nuisance_columns",
 ]
-
-EFFECT_NAMES = (
-    "meshing_efficiency",
-    "load_dependent_efficiency",
-    "temperature_dependent_efficiency",
-    "viscous_friction",
-    "backlash",
-    "coulomb_friction",
-    "load_offset",
-)
 
 _EFFICIENCY_MODELS = (
     "constant_efficiency",
@@ -105,7 +95,6 @@ class Effect:
     report: Callable[[Any], dict[str, Any]]
     unavailable: Callable[[Any], str | None] = lambda model: None
     n_params: int = 1
-    extra: dict = field(default_factory=dict)
 
 
 def _rig_key_unit(model: Any) -> tuple[str, str]:
@@ -235,7 +224,7 @@ def _offset_build(ctx: Any, values: dict[str, float]) -> Changes:
     return {}, {"load_offset": float(values["load_offset"])}
 
 
-def _L0(model: Any) -> float:
+def present_mesh_loss(model: Any) -> float:
     """Present constant meshing loss 1 - eta (0 without an efficiency model)."""
     if mk.friction_model(model) == "constant_efficiency":
         return 1.0 - float(mk.block_values(model)["efficiency_const"])
@@ -298,25 +287,17 @@ def _ld_present(model: Any) -> bool:
 
 
 def _ld_columns(ctx: Any):
-    L0 = _L0(ctx.model)
+    L0 = present_mesh_loss(ctx.model)
     return [
         ("idle", ctx.columns["idle"], (0.0, np.inf)),
         ("mesh", ctx.columns["mesh"], (-L0, 0.7 - L0)),
     ]
 
 
-def _ld_nominal(ctx: Any) -> float:
-    tn = _robust(ctx.T, 90.0)
-    if tn <= 0:
-        tn = 1.0
-    exp = np.floor(np.log10(tn))
-    return float(np.round(tn / 10**exp, 1) * 10**exp)
-
-
 def _ld_params(ctx: Any, screen: Any) -> list[FitParam]:
     g = float(mk.block_values(ctx.model)["teeth_ratio"])
     idle_f = max(_seed(screen, "idle", 0.0), 0.0)  # follower-referred g*tau_idle
-    k = max(_L0(ctx.model) + _seed(screen, "mesh", 0.02), 0.0)
+    k = max(present_mesh_loss(ctx.model) + _seed(screen, "mesh", 0.02), 0.0)
     f = _force_scale(ctx)
     return [
         FitParam("idle_torque", idle_f / g, 0.0, max(2.0 * f / g, 10 * idle_f / g), "N*m"),
@@ -326,7 +307,7 @@ def _ld_params(ctx: Any, screen: Any) -> list[FitParam]:
 
 def _ld_build(ctx: Any, values: dict[str, float]) -> Changes:
     g = float(mk.block_values(ctx.model)["teeth_ratio"])
-    tnom = ctx.extra_nominal if hasattr(ctx, "extra_nominal") else _ld_nominal(ctx)
+    tnom = ctx.nominal_torque
     idle = float(values["idle_torque"])
     k = float(values["load_slope"])
     # eq. 2.5: k = 1/eta_nom - 1 - g*tau_idle/tau_nom  =>  eta_nom; keep k >= 0
@@ -383,13 +364,13 @@ def _td_columns(ctx: Any):
         return []
     hats = temperature_hats(ctx.temperature, bp)
     mesh = ctx.columns["mesh"]
-    L0 = _L0(ctx.model)
+    L0 = present_mesh_loss(ctx.model)
     return [(f"mesh@{t:.1f}K", mesh * hats[:, i], (-L0, 0.7 - L0)) for i, t in enumerate(bp)]
 
 
 def _td_params(ctx: Any, screen: Any) -> list[FitParam]:
     bp = _td_breakpoints(ctx)
-    L0 = _L0(ctx.model)
+    L0 = present_mesh_loss(ctx.model)
     out = []
     for i, t in enumerate(bp):
         # screening coefficients are changes of the present loss 1 - eta
@@ -565,6 +546,8 @@ EFFECTS: dict[str, Effect] = {
         lambda m: {"load_offset": mk.rig_values(m)["load_offset"]},
     ),
 }
+#: The effects in the order they are offered (that of EFFECTS).
+EFFECT_NAMES: tuple[str, ...] = tuple(EFFECTS)
 
 
 def get_effect(name: str, model: Any | None = None) -> Effect:
@@ -591,14 +574,13 @@ def applicable_effects(model: Any) -> tuple[list[Effect], dict[str, str]]:
     """Candidate effects for the model, and {effect: reason} for those left out."""
     blk = mk.block_name(model)
     out, skipped = [], {}
-    for name in EFFECT_NAMES:
-        eff = EFFECTS[name]
+    for name, eff in EFFECTS.items():
         if blk not in eff.blocks:
             skipped[name] = f"does not apply to the {blk} rig"
         elif eff.present(model):
             skipped[name] = "already in the model"
-        elif eff.unavailable(model):
-            skipped[name] = str(eff.unavailable(model))
+        elif why := eff.unavailable(model):
+            skipped[name] = str(why)
         else:
             out.append(eff)
     return out, skipped

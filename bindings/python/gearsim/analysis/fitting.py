@@ -202,7 +202,6 @@ def fit_effect(
                 c = float(np.sum(fun(trial) ** 2))
                 if c < best[0]:
                     best = (c, trial[i])
-            x0[i] = best[1]
             params[i].x0 = float(best[1])
             x0[i] = params[i].clipped_x0()
     lb = np.array([p.lower for p in params])

@@ -493,11 +493,7 @@ def _validate(
 
 def write_measurement(path: str | os.PathLike[str], meas: Measurement, *, digits: int = 9) -> None:
     """Write a measurement as a canonical CSV (header row, %.{digits}g values)."""
-    names = [
-        "time",
-        *[c for c in meas.spec.required[1:]],
-        *[c for c in OPTIONAL_INPUTS if c in meas.data],
-    ]
+    names = [*meas.spec.required, *(c for c in OPTIONAL_INPUTS if c in meas.data)]
     cols = [meas.time] + [meas.data[c] for c in names[1:]]
     arr = np.column_stack(cols)
     fmt = f"%.{digits}g"

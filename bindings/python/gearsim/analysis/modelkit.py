@@ -16,8 +16,6 @@ __all__ = [
     "block_name",
     "block_values",
     "rig_values",
-    "given_block",
-    "given_rig",
     "changed",
     "kinematic_ratio",
     "driven_radius",
@@ -27,53 +25,19 @@ __all__ = [
 ]
 
 
-def _model_cls():
-    from .. import Model  # late: the bindings import the C extension
-
-    return Model
-
-
 def block_name(model: Any) -> str:
     """ "simple_gear" or "rack_pinion"."""
-    b = getattr(model, "block_name", None) or getattr(model, "block", None)
-    if isinstance(b, str):
-        return b
-    kind = getattr(b, "kind", None)
-    if isinstance(kind, str):
-        return kind
-    raise TypeError("cannot tell the block of this model")  # pragma: no cover
-
-
-def _defaults(block: str) -> tuple[dict[str, Any], dict[str, Any]]:
-    from .. import params as P
-
-    return P.block_defaults(block), P.rig_defaults(block)
-
-
-def given_block(model: Any) -> dict[str, Any]:
-    return dict(getattr(model, "block_params", {}) or {})
-
-
-def given_rig(model: Any) -> dict[str, Any]:
-    return dict(getattr(model, "rig_params", {}) or {})
+    return model.block
 
 
 def block_values(model: Any) -> dict[str, Any]:
     """Every block parameter in use (given, else the default), SI units."""
-    resolved = getattr(model, "resolved_block_params", None)
-    if resolved is not None:
-        return dict(resolved)
-    bdef, _ = _defaults(block_name(model))
-    return {**bdef, **given_block(model)}
+    return dict(model.resolved_block_params)
 
 
 def rig_values(model: Any) -> dict[str, Any]:
     """Every rig parameter in use (given, else the default), SI units."""
-    resolved = getattr(model, "resolved_rig_params", None)
-    if resolved is not None:
-        return dict(resolved)
-    _, rdef = _defaults(block_name(model))
-    return {**rdef, **given_rig(model)}
+    return dict(model.resolved_rig_params)
 
 
 def changed(
@@ -81,13 +45,7 @@ def changed(
 ) -> Any:
     """A new Model with some block and rig parameters changed (validated by
     the C core: an invalid value raises gearsim.ParameterError)."""
-    if hasattr(model, "replace"):
-        return model.replace(block_params=dict(block or {}), rig_params=dict(rig or {}))
-    b = given_block(model)
-    r = given_rig(model)
-    b.update(block or {})
-    r.update(rig or {})
-    return _model_cls()(block=block_name(model), block_params=b, rig_params=r)
+    return model.replace(block_params=dict(block or {}), rig_params=dict(rig or {}))
 
 
 def friction_model(model: Any) -> str:

@@ -76,9 +76,8 @@ def run_rounds(
             break
         say(f"round {k}: adding {best.effect}")
         if best.fit is not None and best.effect != "backlash":
-            fr = (
-                best.fit
-            )  # diagnose fitted it in full already (quick fits differ for backlash only)
+            # diagnose fitted it in full already (quick fits differ for backlash only)
+            fr = best.fit
         else:
             ctx = build_context(out[-1].model, meas, inputs, cur.sim, cur.regime_masks)
             fr = fit_effect(ctx, best.effect, progress=say)
@@ -116,14 +115,21 @@ def _spans(mask: np.ndarray) -> list[tuple[int, int]]:
 _COLORS = ["#d62728", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#bcbd22", "#17becf"]
 
 
-def _fig_overlay(plt, meas: Measurement, rounds: list[Round]):
+def _time_axes(plt, meas: Measurement):
+    """A figure with one row per output over time; the decimation stride and
+    the decimated time axis."""
     outs = meas.spec.outputs
     fig, axes = plt.subplots(
         len(outs), 1, figsize=(11, 3.2 * len(outs)), sharex=True, squeeze=False
     )
+    axes[-1, 0].set_xlabel("time [s]")
     s = _stride(meas.n)
-    t = meas.time[::s]
-    for ax, o in zip(axes[:, 0], outs, strict=True):
+    return fig, axes, s, meas.time[::s]
+
+
+def _fig_overlay(plt, meas: Measurement, rounds: list[Round]):
+    fig, axes, s, t = _time_axes(plt, meas)
+    for ax, o in zip(axes[:, 0], meas.spec.outputs, strict=True):
         ax.plot(t, meas[o][::s], color="0.55", lw=0.8, label="measured")
         first = rounds[0].compare.sim.outputs[o][::s]
         ax.plot(
@@ -145,32 +151,28 @@ def _fig_overlay(plt, meas: Measurement, rounds: list[Round]):
         ax.set_ylabel(f"{o} [{meas.spec.unit(o)}]")
         ax.grid(alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)
-    axes[-1, 0].set_xlabel("time [s]")
     fig.suptitle("measured vs simulated (open loop)")
     fig.tight_layout()
     return fig
 
 
 def _fig_residual(plt, meas: Measurement, rounds: list[Round]):
-    outs = meas.spec.outputs
-    fig, axes = plt.subplots(
-        len(outs), 1, figsize=(11, 3.2 * len(outs)), sharex=True, squeeze=False
-    )
-    s = _stride(meas.n)
-    t = meas.time[::s]
+    fig, axes, s, t = _time_axes(plt, meas)
     base = rounds[0].compare
     failing = [r["regime"] for r in base.failing_regimes]
     masks = {r.name: r.mask for r in base.regime_masks}
-    for ax, o in zip(axes[:, 0], outs, strict=True):
-        for i, name in enumerate(failing[:4]):
-            for a, b in _spans(masks[name]):
+    # the spans of each shaded regime, found once for all the axes
+    shaded = [(name, _spans(masks[name])) for name in failing[:4]]
+    for ax, o in zip(axes[:, 0], meas.spec.outputs, strict=True):
+        for i, (name, spans) in enumerate(shaded):
+            for j, (a, b) in enumerate(spans):
                 ax.axvspan(
                     meas.time[a],
                     meas.time[min(b, meas.n - 1)],
                     color=_COLORS[i % len(_COLORS)],
                     alpha=0.18,
                     lw=0,
-                    label=name if (a, b) == _spans(masks[name])[0] else None,
+                    label=name if j == 0 else None,
                 )
         ax.plot(
             t, (meas[o] - base.sim.outputs[o])[::s], color="#1f77b4", lw=0.6, label="starting model"
@@ -188,7 +190,6 @@ def _fig_residual(plt, meas: Measurement, rounds: list[Round]):
         ax.set_ylabel(f"residual {o} [{meas.spec.unit(o)}]")
         ax.grid(alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)
-    axes[-1, 0].set_xlabel("time [s]")
     title = "residual (measured - simulated)"
     if failing:
         title += "; shaded: failing regimes of the starting model"

@@ -38,6 +38,7 @@ its coefficients, and the regime where its contribution is largest.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -92,6 +93,17 @@ class Context:
     @property
     def r_d(self) -> np.ndarray:
         return self.residual[self.torque_output] / self.kin
+
+    @cached_property
+    def nominal_torque(self) -> float:
+        """A round nominal transmitted torque/force: the 90th percentile of |T|
+        to two significant digits (tau_nom of a fitted load-dependent
+        efficiency). Cached: every evaluation of that fit asks for it."""
+        tn = float(np.percentile(np.abs(self.T), 90.0)) if self.T.size else 0.0
+        if tn <= 0:
+            tn = 1.0
+        exp = np.floor(np.log10(tn))
+        return float(np.round(tn / 10**exp, 1) * 10**exp)
 
     def overall_nrmse(self, torque_nrmse: float, speed_nrmse: float | None = None) -> float:
         s = self.base_nrmse[self.speed_output] if speed_nrmse is None else speed_nrmse
@@ -189,29 +201,6 @@ def build_context(
         "idle": _sgn(v, max(float(blk.get("speed_threshold", 0.01)), 0.005 * vmax)),
     }
     return ctx
-
-
-def thermal_proxy(ctx: Context, loss_power: np.ndarray) -> np.ndarray:
-    """Temperature the model's thermal mass would reach with this loss power
-    (explicit Euler of C dT/dt = P + (T_amb - T)/R_th), in K."""
-    blk = mk.block_values(ctx.model)
-    rig = mk.rig_values(ctx.model)
-    c = float(blk.get("thermal_mass", 50.0))
-    t0 = float(blk.get("initial_temperature", 300.0))
-    r = rig.get("thermal_resistance")
-    amb = float(rig.get("ambient_temperature", 293.15))
-    dt = ctx.meas.dt
-    out = np.empty_like(loss_power)
-    t = t0
-    g = 0.0 if r is None else dt / (c * float(r))
-    k = dt / c
-    # vectorised first-order recursion via cumulative sums when adiabatic
-    if r is None:
-        return t0 + np.cumsum(loss_power) * k
-    for i, p in enumerate(loss_power):  # pragma: no cover - rarely used, short records only
-        t = t + k * p + g * (amb - t)
-        out[i] = t
-    return out
 
 
 @dataclass

@@ -22,7 +22,6 @@ from typing import Any
 
 import numpy as np
 
-from . import modelkit as mk
 from .measurement import Measurement
 from .signals import auto_cutoff, zero_phase_lowpass
 
@@ -111,14 +110,22 @@ _SIGNALS = (
 )
 
 
-def run_rig(model: Any, inputs: Inputs, temperature_input: bool) -> Any:
-    rig = model.rig(dt=inputs.dt, temperature_input=temperature_input)
+def _run(model: Any, meas: Measurement, inputs: Inputs) -> tuple[Any, dict[str, np.ndarray]]:
+    """One batch run of the model's rig on the inputs: the RigResult, and the
+    two simulated outputs under their canonical names."""
+    use_temperature = inputs.measured_temperature is not None
+    rig = model.rig(dt=inputs.dt, temperature_input=use_temperature)
     kw: dict[str, Any] = {"base_speed": inputs.base_speed, "load": inputs.load}
     if inputs.ambient_temperature is not None:
         kw["ambient_temperature"] = inputs.ambient_temperature
-    if temperature_input and inputs.measured_temperature is not None:
+    if use_temperature:
         kw["measured_temperature"] = inputs.measured_temperature
-    return rig.run(**kw)
+    res = rig.run(**kw)
+    spec = meas.spec
+    return res, {
+        spec.torque_output: np.asarray(res.base_torque, dtype=float),
+        spec.speed_output: np.asarray(res.driven_speed, dtype=float),
+    }
 
 
 def simulate(
@@ -127,12 +134,7 @@ def simulate(
     """Run the model's rig open-loop on the measurement's inputs."""
     if inputs is None:
         inputs = prepare_inputs(meas)
-    res = run_rig(model, inputs, temperature_input=inputs.measured_temperature is not None)
-    spec = meas.spec
-    outputs = {
-        spec.torque_output: np.asarray(res.base_torque, dtype=float),
-        spec.speed_output: np.asarray(res.driven_speed, dtype=float),
-    }
+    res, outputs = _run(model, meas, inputs)
     sig = {}
     for name in signals:
         val = getattr(res, name, None)
@@ -143,13 +145,4 @@ def simulate(
 
 def simulate_outputs(model: Any, meas: Measurement, inputs: Inputs) -> dict[str, np.ndarray]:
     """Only the two simulated outputs (the fitting loop's call)."""
-    res = run_rig(model, inputs, temperature_input=inputs.measured_temperature is not None)
-    spec = meas.spec
-    return {
-        spec.torque_output: np.asarray(res.base_torque, dtype=float),
-        spec.speed_output: np.asarray(res.driven_speed, dtype=float),
-    }
-
-
-def kinematic_ratio(model: Any) -> float:
-    return mk.kinematic_ratio(model)
+    return _run(model, meas, inputs)[1]

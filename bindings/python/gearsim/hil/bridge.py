@@ -36,6 +36,7 @@ from typing import Any
 import can
 
 from ..errors import GearsimError
+from ..rig import INPUT_NAMES, OUTPUT_NAMES
 from .codec import FrameSpec, Rejection, RigDbc
 
 __all__ = [
@@ -56,18 +57,6 @@ _TWO_PI = 2.0 * math.pi
 #: Spans of constant input at least this many rig steps long are run in C in
 #: one call (Rig.run_array, bit-identical to Rig.step); shorter ones call Rig.step.
 _BATCH_MIN_STEPS = 4
-
-
-def _output_names() -> tuple[str, ...]:
-    from ..rig import OUTPUT_NAMES
-
-    return OUTPUT_NAMES
-
-
-def _input_names() -> tuple[str, ...]:
-    from ..rig import INPUT_NAMES
-
-    return INPUT_NAMES
 
 
 class BridgeError(GearsimError, ValueError):
@@ -236,13 +225,13 @@ class Bridge:
             raise BridgeError(
                 "the bridge steps rigs built with temperature_input=False", parameter="rig"
             )
-        out_names = list(_output_names())
+        out_names = list(OUTPUT_NAMES)
         self._out_fields = [(n, out_names.index(n)) for n in sorted(names)]
         self._batch: Any = None
         if hasattr(rig, "run_array"):
             import numpy as np
 
-            in_names = list(_input_names())
+            in_names = list(INPUT_NAMES)
             self._batch = (
                 np.empty((64, len(in_names))),
                 np.empty((64, len(out_names))),

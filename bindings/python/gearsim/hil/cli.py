@@ -22,6 +22,7 @@ import signal
 import sys
 import threading
 import traceback
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -267,23 +268,12 @@ def _emit(args: argparse.Namespace, data: dict[str, Any], text: list[str]) -> No
 
 
 def _counter_lines(summary: dict[str, Any]) -> list[str]:
-    keys = (
-        "rx_total",
-        "rx_used",
-        "rx_rejected",
-        "rx_late",
-        "rx_ignored",
-        "pending",
-        "tx_frames",
-        "tx_errors",
-        "timeouts",
-        "recoveries",
-        "overruns",
-        "resyncs",
-        "saturations",
-        "periods",
-        "steps",
-    )
+    from .bridge import Counters
+
+    # the Counters fields in their order, pending beside the rx classes it
+    # completes (rx_total = used + rejected + late + ignored + pending)
+    keys = [f.name for f in fields(Counters) if f.name not in ("reasons", "saturated")]
+    keys.insert(keys.index("rx_ignored") + 1, "pending")
     lines = [
         f"simulated time   {summary['simulated_time']:.6f} s "
         f"({summary['periods']} periods of {summary['period'] * 1e3:g} ms)"
@@ -395,22 +385,18 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         raise _InputError(f"{args.log}: no such log file")
     model = _load_model(args.model)
     dbc = _dbc_for(args, model.block)
-    try:
-        result = replay(
-            model,
-            args.log,
-            args.out,
-            dbc=dbc,
-            period=args.period,
-            substeps=args.substeps,
-            timeout=args.timeout,
-            tail=args.tail,
-            with_input=args.with_input,
-        )
-    except ValueError as exc:
-        if "suffix" in str(exc) or "format" in str(exc).lower():
-            raise _InputError(f"{exc}") from None
-        raise
+    # an unknown log suffix is a ValueError: run_args reports it as bad input
+    result = replay(
+        model,
+        args.log,
+        args.out,
+        dbc=dbc,
+        period=args.period,
+        substeps=args.substeps,
+        timeout=args.timeout,
+        tail=args.tail,
+        with_input=args.with_input,
+    )
     data = result.as_dict()
     lines = [
         f"replayed {result.frames_in} frames, answered {result.frames_out} frames in "

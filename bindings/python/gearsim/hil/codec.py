@@ -37,6 +37,7 @@ import can
 import cantools
 
 from ..errors import GearsimError
+from ..rig import OUTPUT_NAMES
 
 __all__ = [
     "DbcError",
@@ -58,24 +59,9 @@ BLOCK_ATTRIBUTE = "GsBlock"
 
 COMMAND_ROLES: tuple[str, ...] = ("cmd.base_speed", "cmd.base_torque", "cmd.load", "cmd.mode")
 INPUT_ROLES: tuple[str, ...] = ("in.base_speed", "in.base_torque", "in.load")
-#: RigResult fields (docs/python-api.md), usable as ``out.<field>``.
-OUTPUT_FIELDS: tuple[str, ...] = (
-    "base_torque",
-    "base_speed",
-    "base_angle",
-    "driven_speed",
-    "driven_position",
-    "base_port_torque",
-    "driven_port_torque",
-    "mesh_loss_power",
-    "loss_power",
-    "port_power",
-    "contact_energy",
-    "temperature",
-    "backlash_position",
-    "contact_force",
-    "driven_acceleration",
-)
+#: RigResult fields (docs/python-api.md), usable as ``out.<field>``: the rig's
+#: own list, so that the two cannot drift apart.
+OUTPUT_FIELDS: tuple[str, ...] = OUTPUT_NAMES
 #: out.driven_angle: driven_position modulo 2*pi, in [0, 2*pi) (gear rig).
 DERIVED_OUTPUTS: tuple[str, ...] = ("driven_angle",)
 #: Status flags. The first three are the state during the frame period that
@@ -213,6 +199,11 @@ class Rejection:
     reason: str
     """"bad_length", "undecodable" or "out_of_range" (the codec's part)"""
     detail: str
+
+
+def _nearest_zero(s: SignalSpec) -> float:
+    """The value in the signal's [minimum, maximum] nearest 0."""
+    return min(max(0.0, s.minimum), s.maximum)
 
 
 def _raw_limits(length: int, signed: bool) -> tuple[int, int]:
@@ -362,7 +353,7 @@ class RigDbc:
         if sig.choices:
             choices = {int(k): str(v) for k, v in sig.choices.items()}
         if role == "cmd.mode":
-            names = choices or {k: v for k, v in _DEFAULT_MODE_VALUES.items()}
+            names = choices or _DEFAULT_MODE_VALUES
             for raw, name in names.items():
                 if str(name).strip().lower() not in _MODE_NAMES:
                     self._fail(
@@ -481,7 +472,7 @@ class RigDbc:
         for s in frame.signals:
             role = s.role
             if role is None:
-                data[s.name] = min(max(0.0, s.minimum), s.maximum)
+                data[s.name] = _nearest_zero(s)
                 continue
             v = values[role]
             if role == "status.counter" or role.startswith("status.count."):
@@ -492,11 +483,7 @@ class RigDbc:
                 continue
             x = float(v)
             if not math.isfinite(x):
-                x = (
-                    min(max(0.0, s.minimum), s.maximum)
-                    if math.isnan(x)
-                    else (s.maximum if x > 0 else s.minimum)
-                )
+                x = _nearest_zero(s) if math.isnan(x) else (s.maximum if x > 0 else s.minimum)
                 saturated.append(s.name)
             elif x < s.minimum:
                 x = s.minimum
