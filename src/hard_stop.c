@@ -120,6 +120,7 @@ void gs_contact_prepare(const gs_mesh_ *m, gs_real h, gs_real inv_mass, gs_conta
     cs->inv_affine_undamped = GS_R(1.0) / (GS_R(1.0) + cs->c * m->stiffness * h);
     cs->dxi_dv = h * m->inv_transition;
     cs->transition = m->inv_transition > GS_R(0.0) ? GS_R(1.0) / m->inv_transition : GS_R(0.0);
+    cs->law_force_conditioned = cs->c * cs->draw_dv < GS_R(1.0);
 }
 
 /* ---- The no-pull contact (the default): closed forms and a short Newton.
@@ -151,7 +152,7 @@ static gs_real affine_root(const closing_ *q, gs_real inv_affine)
  * there and it pushes; the stop's edge if the law jumps over zero there
  * (damping switched on at first contact); v_free if the clipped force is zero
  * at v_free (separating faster than the spring pushes). */
-static gs_real full_root(const gs_mesh_ *m, const closing_ *q)
+static gs_real full_root(const gs_mesh_ *m, const closing_ *q, int *on_edge)
 {
     gs_real v = affine_root(q, q->cs->inv_affine_damped);
     if (m->hard_stop == GS_HARD_STOP_FULL_UNDAMPED && v < GS_R(0.0)) {
@@ -159,7 +160,8 @@ static gs_real full_root(const gs_mesh_ *m, const closing_ *q)
         v = affine_root(q, q->cs->inv_affine_undamped);
     }
     const gs_real v_edge = -q->p0 * q->cs->inv_h;
-    if (!(v > v_edge)) {
+    *on_edge = !(v > v_edge);
+    if (*on_edge) {
         return v_edge;
     }
     return gs_min(v, q->v_free);
@@ -171,7 +173,8 @@ static gs_real full_root(const gs_mesh_ *m, const closing_ *q)
  * tolerance, or earlier once Newton's own error bound for the step just
  * computed, |Phi''|*step^2/(2*Phi'), is below half the tolerance: that step
  * is then taken without evaluating the law again. The bound is used only for
- * steps already below sqrt(tolerance), where it is in its asymptotic range. */
+ * steps already below sqrt(tolerance), where it is in its asymptotic range.
+ * Without convergence in NEWTON_ITERATIONS passes, a passive bracket end. */
 static gs_real smooth_transition_root(const gs_mesh_ *m, const closing_ *q, gs_real v_lo, gs_real v_hi,
                                       gs_real v_guess)
 {
@@ -183,7 +186,11 @@ static gs_real smooth_transition_root(const gs_mesh_ *m, const closing_ *q, gs_r
     const gs_real inv_d = m->inv_transition;
     const gs_real scale_v = gs_abs(q->v_free) + (hi - lo);
     const gs_real tolerance = NEWTON_TOLERANCE * scale_v;
-    const gs_real asymptotic = NEWTON_ASYMPTOTIC * scale_v;
+    /* the early stop judges a step against the bracket, not against |v_free|:
+     * with v_free far above the bracket (a light rack at 4e4 m/s) a step of
+     * 1e-3 m/s looked asymptotic and the bound passed it off the root (fuzz
+     * finding) */
+    const gs_real asymptotic = NEWTON_ASYMPTOTIC * (hi - lo);
     gs_real v = v_guess > lo && v_guess < hi ? v_guess : GS_R(0.5) * (lo + hi);
     for (int i = 0; i < NEWTON_ITERATIONS; ++i) {
         const gs_real delta = q->p0 + cs->h * v;
@@ -219,7 +226,25 @@ static gs_real smooth_transition_root(const gs_mesh_ *m, const closing_ *q, gs_r
         }
         v = next > lo && next < hi ? next : GS_R(0.5) * (lo + hi);
     }
-    return v;
+    /* Out of passes (a very stiff contact whose force is cubic in the
+     * penetration near first touch: Newton converges only linearly there).
+     * Return the bracket end on the side of the motion: with the force taken
+     * from the impulse balance, the closing end lo >= 0 gives a force at or
+     * above the law's and the separating end hi <= 0 one at or below it, so
+     * the contact damping never does negative work (fuzz finding). */
+    if (lo < GS_R(0.0) && hi > GS_R(0.0)) {
+        const gs_real raw0 = k * q->p0;
+        gs_real phi0 = -q->v_free;
+        if (raw0 > GS_R(0.0)) {
+            phi0 += cs->c * smooth_step(gs_clamp(q->p0 * inv_d, GS_R(0.0), GS_R(1.0))) * raw0;
+        }
+        if (phi0 > GS_R(0.0)) {
+            hi = GS_R(0.0);
+        } else {
+            lo = GS_R(0.0);
+        }
+    }
+    return lo >= GS_R(0.0) ? lo : hi;
 }
 
 static gs_real smooth_root(const gs_mesh_ *m, const closing_ *q, gs_real v_guess)
@@ -238,13 +263,37 @@ static gs_real smooth_root(const gs_mesh_ *m, const closing_ *q, gs_real v_guess
             return gs_clamp(affine_root(q, cs->inv_affine_damped), v_full, q->v_free);
         }
     }
-    return smooth_transition_root(m, q, v_edge, gs_min(v_full, q->v_free), v_guess);
+    /* Below the speed where K*delta + D*v = 0 the clipped force is zero and
+     * Phi(v) = v - v_free < 0: the root lies above it. Starting the bracket
+     * there keeps the kink of the clip out of Newton's way; on a stiff
+     * contact (kappa ~ 1e6) Newton stepped across it from the flat side and
+     * bisection did not close the bracket in 12 passes (fuzz finding). */
+    const gs_real v_kink = -m->stiffness * q->p0 / cs->draw_dv;
+    return smooth_transition_root(m, q, gs_max(v_edge, v_kink), gs_min(v_full, q->v_free), v_guess);
 }
 
 /* Spring part of the force at penetration delta > 0 (side-normalised). */
 static gs_real spring_force(const gs_mesh_ *m, gs_real delta)
 {
     gs_real f = m->stiffness * delta;
+    if (m->hard_stop == GS_HARD_STOP_SMOOTH) {
+        const gs_real xi = delta * m->inv_transition;
+        if (xi < GS_R(1.0)) {
+            f *= smooth_step(xi);
+        }
+    }
+    return f;
+}
+
+/* The clipped contact law at penetration delta > 0 and closing speed v,
+ * side-normalised (>= 0). */
+static gs_real law_force(const gs_mesh_ *m, gs_real delta, gs_real v)
+{
+    gs_real damping = m->damping;
+    if (m->hard_stop == GS_HARD_STOP_FULL_UNDAMPED && v < GS_R(0.0)) {
+        damping = GS_R(0.0);
+    }
+    gs_real f = gs_max(GS_R(0.0), m->stiffness * delta + damping * v);
     if (m->hard_stop == GS_HARD_STOP_SMOOTH) {
         const gs_real xi = delta * m->inv_transition;
         if (xi < GS_R(1.0)) {
@@ -273,15 +322,32 @@ static gs_real solve_no_pull(const gs_mesh_ *m, const gs_contact_step_ *cs, gs_r
     q.p0 = side * x - m->half_gap;
     q.v_free = side * u_free;
     gs_real v;
+    int on_edge = 0; /* the root is the stop's edge, on a jump of a full law */
     if (m->hard_stop == GS_HARD_STOP_SMOOTH) {
         /* start from the last sub-step's force: it changes little between sub-steps */
         v = smooth_root(m, &q, q.v_free - cs->c * side * m->contact_force);
     } else {
-        v = full_root(m, &q);
+        v = full_root(m, &q, &on_edge);
     }
     const gs_real delta = q.p0 + cs->h * v;
-    *force = side * (q.v_free - v) * cs->inv_c;
-    *f_spring = delta > GS_R(0.0) ? side * spring_force(m, delta) : GS_R(0.0);
+    /* The force at the root: the impulse balance (v_free - v)/c, which keeps
+     * the momentum exact, unless the root's residual makes it do negative
+     * damping work against the spring, (f - f_spring)*v < 0, on a contact
+     * with kappa = c*(K*h + D) < 1; then the law at v, whose damping part
+     * S*D*v*v never does. That happens where c*f is below the rounding of
+     * v_free (a heavy, finely geared follower: the balance gave f = 0
+     * against a compressed spring, energy from nothing; fuzz finding). With
+     * kappa >= 1 the law would multiply the root's error by kappa into the
+     * momentum (fuzz finding), while the balance's damping error is the
+     * root's error over c: the balance stays. On the stop's edge (a jump of
+     * the law) only the balance picks the force inside the jump. */
+    const gs_real spring = delta > GS_R(0.0) ? spring_force(m, delta) : GS_R(0.0);
+    gs_real f_s = (q.v_free - v) * cs->inv_c;
+    if (cs->law_force_conditioned && !on_edge && delta > GS_R(0.0) && (f_s - spring) * v < GS_R(0.0)) {
+        f_s = law_force(m, delta, v);
+    }
+    *force = side * f_s;
+    *f_spring = side * spring;
     return side * v;
 }
 
@@ -365,7 +431,11 @@ gs_real gs_contact_solve(gs_mesh_ *m, const gs_contact_step_ *cs, gs_real x, gs_
     }
     const gs_real u = m->no_pull ? solve_no_pull(m, cs, x, u_free, force, f_spring)
                                  : solve_bracketed(m, cs, x, u_free, force, f_spring);
-    if (m->lock_enabled && gs_abs(x + cs->h * u) >= m->half_gap && gs_abs(u) < m->lock_speed) {
+    /* Lock a slow impact: at or beyond the stop, closing or stopped (u has
+     * the sign of the side, or is zero), never while the teeth separate. */
+    const gs_real x_end = x + cs->h * u;
+    if (m->lock_enabled && gs_abs(x_end) >= m->half_gap && gs_abs(u) < m->lock_speed &&
+        x_end * u >= GS_R(0.0)) {
         m->locked = 1;
     }
     return u;

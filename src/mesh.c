@@ -143,7 +143,8 @@ void gs_mesh_block_step(gs_mesh_ *m, gs_real dt, const gs_mesh_in_ *in, gs_mesh_
         u = m->base_radius * w_b - m->direction * m->follower_radius * w_f;
         f = gs_contact_force(m, m->position, u, &f_spring);
         const gs_real t_f0 = -m->direction * m->follower_radius * f;
-        tau_mesh = gs_mesh_loss_torque(m, &ctx, t_f0, w_f);
+        tau_mesh = gs_mesh_loss_from_tooth(m, &ctx, t_f0, w_f, m->last_follower_torque);
+        m->last_follower_torque = t_f0 + tau_mesh;
         tau_b = m->base_radius * f + m->mu_base * w_b;
         tau_f = t_f0 + tau_mesh + m->mu_follower * w_f;
         m->position += dt * u;

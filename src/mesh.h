@@ -33,6 +33,12 @@ void gs_mesh_set_temperature_table(gs_mesh_ *m, const gs_real *temperature, cons
 void gs_mesh_loss_prepare(const gs_mesh_ *m, gs_real temperature, gs_loss_ctx_ *ctx);
 /* tau_mesh (follower-referred) for net follower torque T and speed w. */
 gs_real gs_mesh_loss_torque(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T, gs_real w);
+/* tau_mesh for a known loss-free tooth torque T_F0 (backlash contact): the
+ * solution of T_F = T_F0 + tau_mesh(T_F) (physics.md 4.6), so that steady
+ * contact transmits the torques of the rigid law. load_estimate is a recent
+ * T_F (the base load of the 2-D table, a fixed point in steady contact). */
+gs_real gs_mesh_loss_from_tooth(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real t_f0, gs_real w,
+                                gs_real load_estimate);
 /* tau_mesh ~ m0 + m1*T near (T, w): used by the implicit torque-driven step. */
 void gs_mesh_loss_linearize(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T, gs_real w,
                             gs_real *m0, gs_real *m1);

@@ -4,12 +4,18 @@
  *  - rigid mesh, speed-driven base: causal form A; the follower's inertia
  *    torque uses the filtered backward-difference base acceleration;
  *  - rigid mesh, torque-driven base: one degree of freedom; the meshing loss
- *    is linearised around the last follower torque (two fixed passes) and
- *    the viscous terms are implicit;
+ *    is linearised around the last follower torque (two fixed passes), the
+ *    viscous terms and the load's Coulomb friction are implicit;
  *  - backlash: the follower (and a torque-driven base) carry their own
  *    speeds; the contact is integrated by backward Euler in a fixed number
- *    of sub-steps, viscous terms implicit, the meshing loss and the load's
- *    Coulomb friction explicit at the start of each sub-step. */
+ *    of sub-steps, viscous terms implicit, the meshing loss evaluated at the
+ *    start of each sub-step from the last contact force.
+ *
+ * Friction on a free driven side (the load's Coulomb friction, and with
+ * backlash the meshing loss) is one mechanism: backward Euler on a friction
+ * bounded by its magnitude (a velocity projection). It stops the driven side
+ * within a step when the bound can, holds it at rest while the applied torque
+ * stays within the Coulomb friction, and never reverses it. */
 #include <string.h>
 
 #include "gearsim/rig.h"
@@ -19,7 +25,6 @@
 #include "validate.h"
 
 #define LINEARISATION_PASSES 2
-#define AUTO_SUBSTEPS_MAX 16
 
 gs_rig_params gs_rig_params_default(void)
 {
@@ -88,15 +93,23 @@ static gs_status check_rig(const gs_rig_params *p, gs_rig_block block, gs_error 
     return GS_OK;
 }
 
+/* The torque-driven base's share of 1/m_eff at the pitch line for sub-step
+ * h, its viscous term implicit (0 for a speed-driven base). */
+static gs_real base_inverse_mass(const gs_rig *r, gs_real h)
+{
+    const gs_mesh_ *m = &r->mesh;
+    if (r->base_drive != GS_BASE_TORQUE_DRIVEN) {
+        return GS_R(0.0);
+    }
+    return m->base_radius * m->base_radius / (r->base_inertia + h * m->mu_base);
+}
+
 /* 1/m_eff at the pitch line for sub-step h, with the viscous terms implicit. */
 static gs_real contact_inverse_mass(const gs_rig *r, gs_real h)
 {
     const gs_mesh_ *m = &r->mesh;
-    gs_real inv = m->follower_radius * m->follower_radius / (r->driven_inertia + h * m->mu_follower);
-    if (r->base_drive == GS_BASE_TORQUE_DRIVEN) {
-        inv += m->base_radius * m->base_radius / (r->base_inertia + h * m->mu_base);
-    }
-    return inv;
+    return m->follower_radius * m->follower_radius / (r->driven_inertia + h * m->mu_follower)
+           + base_inverse_mass(r, h);
 }
 
 /* Smallest count with (h*omega_n)^2 <= 0.25, i.e. h*omega_n <= 0.5, capped:
@@ -105,7 +118,7 @@ static int automatic_substeps(const gs_rig *r)
 {
     const gs_real k_over_m = r->mesh.stiffness * contact_inverse_mass(r, r->dt);
     int n = 1;
-    while (n < AUTO_SUBSTEPS_MAX) {
+    while (n < GS_AUTO_SUBSTEPS_MAX) {
         const gs_real h = r->dt / (gs_real)n;
         if (h * h * k_over_m <= GS_R(0.25)) {
             break;
@@ -113,6 +126,23 @@ static int automatic_substeps(const gs_rig *r)
         ++n;
     }
     return n;
+}
+
+/* h*omega_n of the contact at sub-step h (omega_n = sqrt(K/m_eff)). */
+static gs_real contact_h_omega_n(const gs_rig *r, gs_real h)
+{
+    const gs_real x2 = h * h * r->mesh.stiffness * contact_inverse_mass(r, h);
+    /* Newton for the square root (the core uses no libm), from above: it
+     * decreases monotonically to the root; init only, so the count is loose */
+    gs_real y = x2 > GS_R(1.0) ? x2 : GS_R(1.0);
+    for (int i = 0; i < 200; ++i) {
+        const gs_real next = GS_R(0.5) * (y + x2 / y);
+        if (!(next < y)) {
+            break;
+        }
+        y = next;
+    }
+    return y;
 }
 
 /* Fills the rig around an already validated mesh; the rig parameters were
@@ -133,6 +163,8 @@ static void rig_fill(gs_rig *r, gs_rig_block block, const gs_rig_params *p)
     r->temperature_source = p->temperature_source;
     r->accel_gain = p->dt_s / (p->accel_filter_time_constant_s + p->dt_s);
     r->substeps = 1;
+    r->substeps_capped = 0;
+    r->contact_h_omega_n = GS_R(0.0);
     if (r->mesh.backlash) {
         r->substeps = p->contact_substeps > 0 ? p->contact_substeps : automatic_substeps(r);
     }
@@ -145,9 +177,16 @@ static void rig_fill(gs_rig *r, gs_rig_block block, const gs_rig_params *p)
                                   : GS_R(0.0);
     r->inv_eff_mass_contact = GS_R(0.0);
     memset(&r->contact, 0, sizeof r->contact);
+    memset(&r->contact_stuck, 0, sizeof r->contact_stuck);
     if (r->mesh.backlash) {
         r->inv_eff_mass_contact = contact_inverse_mass(r, r->substep);
         gs_contact_prepare(&r->mesh, r->substep, r->inv_eff_mass_contact, &r->contact);
+        if (r->base_drive == GS_BASE_TORQUE_DRIVEN) {
+            gs_contact_prepare(&r->mesh, r->substep,
+                               base_inverse_mass(r, r->substep), &r->contact_stuck);
+        }
+        r->contact_h_omega_n = contact_h_omega_n(r, r->substep);
+        r->substeps_capped = p->contact_substeps == 0 && r->contact_h_omega_n > GS_R(0.5);
     }
     gs_rig_reset(r);
 }
@@ -205,11 +244,24 @@ void gs_rig_copy_state(gs_rig *to, const gs_rig *from)
     to->base_acceleration = from->base_acceleration;
 }
 
-/* External torque on the driven side: load, offset and smoothed Coulomb friction. */
+/* External torque on the driven side of the speed-driven rigid rig: load,
+ * offset and Coulomb friction smoothed on the imposed speed. */
 static gs_real driven_external(const gs_rig *r, gs_real load, gs_real w_f)
 {
     return load + r->load_offset
            - r->load_coulomb * gs_tanh(GS_R(4.0) * w_f * r->inv_load_speed_threshold);
+}
+
+/* Backward Euler on a speed with a friction of magnitude <= bound (both in
+ * speed units over the step): w_free is the end speed without the friction.
+ * The friction stops the motion if it can (the speed ends at exactly 0),
+ * else it slides against the motion; it never reverses it. */
+static gs_real friction_project(gs_real w_free, gs_real bound)
+{
+    if (gs_abs(w_free) <= bound) {
+        return GS_R(0.0);
+    }
+    return w_free > GS_R(0.0) ? w_free - bound : w_free + bound;
 }
 
 static void rigid_speed_driven(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
@@ -243,22 +295,28 @@ static void rigid_torque_driven(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig
     const gs_real h = r->dt;
     const gs_real a = m->inv_ratio;
     const gs_real w = r->base_speed;
-    const gs_real external = driven_external(r, in->load, a * w);
+    const gs_real push = in->load + r->load_offset;
     gs_real t_f = m->last_follower_torque;
     gs_real w_next = w;
     gs_real dw = GS_R(0.0);
     for (int pass = 0; pass < LINEARISATION_PASSES; ++pass) {
         /* tau_mesh ~ m0 + m1*T_F; J_B dw/h = tau_m - mu_B w' - a (tau_mesh - T_F) with
-         * T_F = external - J_F a dw/h - mu_F a w'. (1 - m1) >= 0 unless the gear self-locks. */
+         * T_F = push + coulomb - J_F a dw/h - mu_F a w'. (1 - m1) >= 0 unless the
+         * gear self-locks. The Coulomb torque on the follower, in [-F_C, F_C],
+         * reaches the base through q: backward Euler with a set-valued sign. */
         gs_real m0;
         gs_real m1;
         gs_mesh_loss_linearize(m, ctx, t_f, a * w_next, &m0, &m1);
         const gs_real q = a * gs_max(GS_R(1.0) - m1, GS_R(0.0));
         const gs_real visc = m->mu_base + q * m->mu_follower * a;
-        dw = (in->base_torque_Nm - a * m0 + q * external - visc * w)
-             / ((r->base_inertia + q * a * r->driven_inertia) / h + visc);
-        w_next = w + dw;
-        t_f = external - r->driven_inertia * a * dw / h - m->mu_follower * a * w_next;
+        const gs_real denominator = (r->base_inertia + q * a * r->driven_inertia) / h + visc;
+        const gs_real w_free = w + (in->base_torque_Nm - a * m0 + q * push - visc * w) / denominator;
+        const gs_real bound = gs_abs(q) * r->load_coulomb / denominator;
+        w_next = friction_project(w_free, bound);
+        dw = w_next - w;
+        /* the Coulomb torque that gives w_next: -F_C*sign(w_F) sliding, what holds it at rest */
+        const gs_real coulomb = bound > GS_R(0.0) ? (w_next - w_free) * denominator / q : GS_R(0.0);
+        t_f = push + coulomb - r->driven_inertia * a * dw / h - m->mu_follower * a * w_next;
     }
     const gs_real w_f = a * w_next;
     const gs_real tau_mesh = gs_mesh_loss_torque(m, ctx, t_f, w_f);
@@ -281,23 +339,107 @@ typedef struct {
     gs_real f, f_spring, u;
 } substep_end;
 
-/* One sub-step from the current speeds with the meshing loss tau_mesh held:
- * free motion, then the backward-Euler contact. Changes only the lock flag. */
-static inline substep_end contact_substep(gs_rig *r, gs_real w_b_free, gs_real external, gs_real tau_mesh)
+/* The base's end speed for a contact force f over the sub-step. */
+static inline gs_real base_end_speed(const gs_rig *r, gs_real w_b_free, gs_real f)
+{
+    return r->base_drive == GS_BASE_SPEED_DRIVEN
+               ? w_b_free
+               : w_b_free - r->substep * r->mesh.base_radius * f * r->inv_base_inertia_sub;
+}
+
+/* One sub-step with the follower moving freely from its free end speed
+ * w_f_free (every torque but the contact included): the backward-Euler
+ * contact. Changes only the lock flag. */
+static inline substep_end contact_moving(gs_rig *r, gs_real w_b_free, gs_real w_f_free)
+{
+    gs_mesh_ *m = &r->mesh;
+    const gs_real sr_f = m->direction * m->follower_radius;
+    substep_end e;
+    const gs_real u_free = m->base_radius * w_b_free - sr_f * w_f_free;
+    e.u = gs_contact_solve(m, &r->contact, m->position, u_free, &e.f, &e.f_spring);
+    e.w_f = w_f_free + r->substep * sr_f * e.f * r->inv_driven_inertia_sub;
+    e.w_b = base_end_speed(r, w_b_free, e.f);
+    return e;
+}
+
+/* One sub-step with the follower held at rest by its friction: the contact
+ * sees the base alone. A speed-driven base imposes the tooth motion, so the
+ * force is the law at the end of the sub-step; a torque-driven base solves
+ * the backward-Euler contact with its own inertia. */
+static inline substep_end contact_stuck(gs_rig *r, gs_real w_b_free)
+{
+    gs_mesh_ *m = &r->mesh;
+    substep_end e;
+    const gs_real u_free = m->base_radius * w_b_free;
+    if (r->base_drive == GS_BASE_SPEED_DRIVEN) {
+        e.u = u_free;
+        e.f = gs_contact_force(m, m->position + r->substep * u_free, u_free, &e.f_spring);
+    } else {
+        e.u = gs_contact_solve(m, &r->contact_stuck, m->position, u_free, &e.f, &e.f_spring);
+    }
+    e.w_f = GS_R(0.0);
+    e.w_b = base_end_speed(r, w_b_free, e.f);
+    return e;
+}
+
+/* One sub-step with a friction torque of magnitude <= bound on the follower
+ * (backward Euler, set-valued at rest): momentum is J_F*w_F + h*(every other
+ * torque but the contact). The joint contact-and-friction solution is one of
+ * three: sliding on in the current direction, stuck, or sliding the other
+ * way; they are tried in that order and the first consistent one is taken,
+ * so a sub-step costs one contact solve while sliding on and at most three
+ * (five with the static-contact lock, see below). *friction is the friction
+ * torque on the follower. */
+static substep_end substep_with_friction(gs_rig *r, gs_real w_b_free, gs_real momentum, gs_real bound,
+                                         gs_real *friction)
 {
     gs_mesh_ *m = &r->mesh;
     const gs_real h = r->substep;
-    const gs_real r_b = m->base_radius;
-    const gs_real sr_f = m->direction * m->follower_radius;
-    const gs_real w_f_free =
-        (r->driven_inertia * r->driven_speed + h * (external - tau_mesh)) * r->inv_driven_inertia_sub;
+    const gs_real w_f = r->driven_speed;
+    const int locked = m->locked;
     substep_end e;
-    const gs_real u_free = r_b * w_b_free - sr_f * w_f_free;
-    e.u = gs_contact_solve(m, &r->contact, m->position, u_free, &e.f, &e.f_spring);
-    e.w_f = w_f_free + h * sr_f * e.f * r->inv_driven_inertia_sub;
-    e.w_b = r->base_drive == GS_BASE_SPEED_DRIVEN ? w_b_free
-                                                  : w_b_free - h * r_b * e.f * r->inv_base_inertia_sub;
-    return e;
+    if (!(bound > GS_R(0.0))) {
+        *friction = GS_R(0.0);
+        return contact_moving(r, w_b_free, momentum * r->inv_driven_inertia_sub);
+    }
+    if (w_f > GS_R(0.0) || w_f < GS_R(0.0)) {
+        const gs_real sigma = gs_sign(w_f);
+        e = contact_moving(r, w_b_free, (momentum - h * sigma * bound) * r->inv_driven_inertia_sub);
+        if (sigma * e.w_f >= GS_R(0.0)) { /* at exactly 0 any friction within the bound is consistent */
+            *friction = -sigma * bound;
+            return e;
+        }
+        m->locked = locked;
+    }
+    e = contact_stuck(r, w_b_free);
+    /* J_F*(0 - w_F) = h*(others + s*r_F*f + friction) */
+    const gs_real needed = -(momentum * r->contact.inv_h + m->direction * m->follower_radius * e.f);
+    if (gs_abs(needed) <= bound) {
+        *friction = needed;
+        return e;
+    }
+    m->locked = locked;
+    const gs_real sigma = needed < GS_R(0.0) ? GS_R(1.0) : GS_R(-1.0); /* the way the rest pushes */
+    e = contact_moving(r, w_b_free, (momentum - h * sigma * bound) * r->inv_driven_inertia_sub);
+    if (sigma * e.w_f >= GS_R(0.0)) {
+        *friction = -sigma * bound;
+        return e;
+    }
+    /* Only with the static-contact lock: the locked follower moves with the
+     * base whatever its friction does, so the friction opposes that motion (a
+     * fourth solve). If that releases the lock and the follower turns back,
+     * the lock's hysteresis leaves no consistent friction: the sub-step runs
+     * without it (a fifth solve), which never does negative work. */
+    m->locked = locked;
+    const gs_real sigma_locked = gs_sign(e.w_f);
+    e = contact_moving(r, w_b_free, (momentum - h * sigma_locked * bound) * r->inv_driven_inertia_sub);
+    if (sigma_locked * e.w_f >= GS_R(0.0)) {
+        *friction = -sigma_locked * bound;
+        return e;
+    }
+    m->locked = locked;
+    *friction = GS_R(0.0);
+    return contact_moving(r, w_b_free, momentum * r->inv_driven_inertia_sub);
 }
 
 static void backlash_step(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
@@ -311,28 +453,35 @@ static void backlash_step(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input
     const int speed_driven = r->base_drive == GS_BASE_SPEED_DRIVEN;
     const gs_real w_b_start = r->base_speed;
     const gs_real w_f_start = r->driven_speed;
+    const gs_real push = in->load + r->load_offset;
     gs_real sum_tau_b = GS_R(0.0), sum_tau_f = GS_R(0.0), sum_mesh = GS_R(0.0), sum_loss = GS_R(0.0);
     gs_real sum_port = GS_R(0.0), sum_f = GS_R(0.0);
     for (int k = 0; k < n; ++k) {
         const gs_real w_f = r->driven_speed;
-        /* explicit: meshing loss on the last contact force, load friction */
-        gs_real tau_mesh = gs_mesh_loss_torque(m, ctx, -sr_f * m->contact_force, w_f);
-        const gs_real external = driven_external(r, in->load, w_f);
+        /* The meshing loss on the last contact force (physics.md 4.6) acts as
+         * a friction on the follower, bounded like the load's Coulomb
+         * friction. Only its part that opposes the motion is applied: the
+         * Simscape smoothing's active sliver near zero power would be an
+         * explicit torque proportional to the contact force, which a stiff
+         * contact on a light follower turns into a divergence. */
+        const gs_real t_f0 = -sr_f * m->contact_force;
+        const gs_real tau_law = gs_mesh_loss_from_tooth(m, ctx, t_f0, w_f, m->last_follower_torque);
+        m->last_follower_torque = t_f0 + tau_law;
+        const gs_real mesh_friction = tau_law * w_f > GS_R(0.0) ? gs_abs(tau_law) : GS_R(0.0);
+        const gs_real bound = r->load_coulomb + mesh_friction;
         /* the held speed ramps linearly from the last sample to this one */
         const gs_real w_b_free =
             speed_driven ? w_b_start + (in->base_speed_rad_s - w_b_start) * ((gs_real)(k + 1) * r->inv_substeps)
                          : (r->base_inertia * r->base_speed + h * in->base_torque_Nm) * r->inv_base_inertia_sub;
-        const int locked = m->locked;
-        substep_end e = contact_substep(r, w_b_free, external, tau_mesh);
-        if (tau_mesh * e.w_f < GS_R(0.0)) {
-            /* The explicit loss would reverse the follower and do negative work:
-             * at a reversal the smoothed law is near zero anyway, so this
-             * sub-step runs without it. At most two solves per sub-step. */
-            m->locked = locked;
-            tau_mesh = GS_R(0.0);
-            e = contact_substep(r, w_b_free, external, tau_mesh);
-        }
-        m->position += h * (r_b * e.w_b - sr_f * e.w_f);
+        gs_real friction;
+        const substep_end e = substep_with_friction(r, w_b_free, r->driven_inertia * w_f + h * push, bound,
+                                                    &friction);
+        /* the meshing loss's share of the friction (it acts on the follower as -tau_mesh) */
+        const gs_real tau_mesh = bound > GS_R(0.0) ? -friction * (mesh_friction / bound) : GS_R(0.0);
+        /* x moves with the relative speed the contact was solved for: the end
+         * speeds give it back only to rounding, and that rounding times the
+         * spring force (held teeth: large force, u = 0) would create energy */
+        m->position += h * e.u;
         m->contact_force = e.f;
         r->base_speed = e.w_b;
         r->driven_speed = e.w_f;
@@ -341,7 +490,7 @@ static void backlash_step(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input
         const gs_real tau_b = r_b * e.f + m->mu_base * e.w_b;
         const gs_real tau_f = -sr_f * e.f + tau_mesh + m->mu_follower * e.w_f;
         /* paired with the end speeds like every port term: the power identity
-         * of the sub-step is exact, and tau_mesh*w_f >= 0 by the check above */
+         * of the sub-step is exact, and the friction never does negative work */
         const gs_real p_mesh = tau_mesh * e.w_f;
         sum_tau_b += tau_b;
         sum_tau_f += tau_f;
@@ -407,6 +556,13 @@ void gs_rig_step(gs_rig *r, const gs_rig_input *in, gs_rig_output *out)
     out->contact_energy_J = m->backlash ? gs_contact_energy(m, m->position) : GS_R(0.0);
     out->temperature_K = m->temperature;
     out->backlash_position_m = m->position;
+}
+
+void gs_rig_get_info(const gs_rig *rig, gs_rig_info *info)
+{
+    info->contact_substeps = rig->substeps;
+    info->contact_h_omega_n = rig->contact_h_omega_n;
+    info->substeps_capped = rig->substeps_capped;
 }
 
 void gs_rig_run(gs_rig *rig, size_t n, const gs_rig_input *in, gs_rig_output *out)

@@ -14,6 +14,13 @@
  * with backlash the driven side has its own speed and the contact is
  * integrated implicitly (backward Euler on the contact, a fixed number of
  * sub-steps), so stiff contact stays bounded at any dt.
+ *
+ * Wherever the driven side moves freely (torque-driven base, or backlash),
+ * load_coulomb_friction is a true Coulomb friction integrated implicitly: it
+ * holds the driven side at rest while the applied torque stays within it and
+ * never reverses the motion; the meshing loss can likewise stop the follower
+ * but not reverse it. In the speed-driven rigid rig the speed is imposed and
+ * the Coulomb friction is tanh-smoothed on load_coulomb_speed_threshold.
  */
 #ifndef GEARSIM_RIG_H
 #define GEARSIM_RIG_H
@@ -29,6 +36,8 @@ extern "C" {
 #define gs_rig_init_rack GS_PRECISION_NAME(gs_rig_init_rack)
 
 #define GS_MAX_SUBSTEPS 64
+/* The automatic sub-step count (contact_substeps = 0) stops here; see gs_rig_info. */
+#define GS_AUTO_SUBSTEPS_MAX 16
 
 typedef enum {
     GS_BASE_SPEED_DRIVEN = 0,
@@ -52,7 +61,8 @@ typedef struct {
     gs_real initial_base_speed_rad_s;      /* torque-driven start speed, default 0 */
     gs_real driven_inertia;                /* follower_inertia kg*m^2 or rack_mass kg (> 0), default 0.05 */
     gs_real load_coulomb_friction;         /* N*m or N (>= 0), default 0 */
-    gs_real load_coulomb_speed_threshold;  /* rad/s or m/s (> 0), tanh(4 w/w_th) smoothing, default 1e-3 */
+    gs_real load_coulomb_speed_threshold;  /* rad/s or m/s (> 0), tanh(4 w/w_th) smoothing of the
+                                              speed-driven rigid rig, default 1e-3 */
     gs_real load_offset;                   /* N*m or N, constant bias on the driven side, default 0 */
     int heat_path;                         /* 1: Q_H = (T_amb - T)/R_th; 0: adiabatic (default 0) */
     gs_real thermal_resistance_K_W;        /* R_th (> 0 when heat_path), default 2 */
@@ -121,6 +131,10 @@ typedef struct {
     gs_real inv_driven_inertia_sub;/* 1/(J_F + h*mu_F): the implicit viscous term */
     gs_real inv_base_inertia_sub;  /* 1/(J_B + h*mu_B) (torque-driven base) */
     gs_contact_step_ contact;      /* backward-Euler contact constants for h */
+    gs_contact_step_ contact_stuck;/* the same with the driven side held by its friction
+                                      (torque-driven base: the base inertia alone) */
+    int substeps_capped;           /* 1: the automatic count stopped at GS_AUTO_SUBSTEPS_MAX */
+    gs_real contact_h_omega_n;     /* h*omega_n of the contact at the chosen sub-step */
     /* state */
     int started;
     gs_real base_speed;
@@ -132,6 +146,21 @@ typedef struct {
 } gs_rig;
 
 gs_rig_params gs_rig_params_default(void);
+
+/* What init chose for the contact integration, for the user to read. */
+typedef struct {
+    int contact_substeps;       /* sub-steps per step (1 without backlash) */
+    gs_real contact_h_omega_n;  /* h*omega_n, omega_n = sqrt(K/m_eff): the contact's
+                                   accuracy figure (0 without backlash); <= 0.5 is the
+                                   automatic target, about 0.05 resolves a rebound */
+    int substeps_capped;        /* 1 when contact_substeps = 0 chose GS_AUTO_SUBSTEPS_MAX
+                                   and h*omega_n is still above 0.5: the contact is
+                                   stable (backward Euler) but over-damped; lower dt or
+                                   set contact_substeps */
+} gs_rig_info;
+
+/* Fills info for an initialised rig. */
+void gs_rig_get_info(const gs_rig *rig, gs_rig_info *info);
 
 /* Validate the block and rig parameters and fill rig. err names the failing
  * parameter (block names as in docs/physics.md; rig names e.g.

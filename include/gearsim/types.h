@@ -3,7 +3,7 @@
  *
  * Real type, status codes, the validation error report, table capacities and
  * the option enums shared by both blocks. Sign convention and equations:
- * docs/physics.md (the copy in ../shared/docs is the source; docs/model.md
+ * docs/physics.md (the reference; docs/model.md
  * in this repository records the choices made where it says "proposal").
  */
 #ifndef GEARSIM_TYPES_H
@@ -193,6 +193,7 @@ typedef struct {
     gs_real draw_dv;             /* K*h + D: d(K*delta + D*v)/dv, N*s/m */
     gs_real dxi_dv;              /* h/d: d(delta/d)/dv for the smooth law, s/m */
     gs_real transition;          /* d, m (smooth law) */
+    int law_force_conditioned;   /* kappa = c*(K*h + D) < 1: the law may give the root's force */
 } gs_contact_step_;
 
 #ifdef __cplusplus

@@ -207,11 +207,11 @@ static void test_reset_reproduces(void **state)
  * the values deliberately, in the same commit as the numerical change, after
  * checking the physics tests still pass; never to silence this test. */
 #ifdef GS_SINGLE_PRECISION
-#define GOLDEN_GEAR 0x228DEB3DCC9EA065ULL
-#define GOLDEN_RACK 0x079E23126393D848ULL
+#define GOLDEN_GEAR 0xB40D85568E1DA8C3ULL
+#define GOLDEN_RACK 0x9B51AF0AFAF8DC69ULL
 #else
-#define GOLDEN_GEAR 0x7C985974EEAB0549ULL
-#define GOLDEN_RACK 0x8C9BAF3BA9DD737CULL
+#define GOLDEN_GEAR 0x6485328C59686383ULL
+#define GOLDEN_RACK 0x5D41C65BBE9B7C9EULL
 #endif
 
 static void test_golden_hash(void **state)
