@@ -297,7 +297,15 @@ typedef struct {
     ...;
 } gs_rig;
 
+typedef struct {
+    int contact_substeps;
+    gs_real contact_h_omega_n;
+    int substeps_capped;
+    ...;
+} gs_rig_info;
+
 gs_rig_params gs_rig_params_default(void);
+void gs_rig_get_info(const gs_rig *rig, gs_rig_info *info);
 gs_status gs_rig_init_gear(gs_rig *rig, const gs_simple_gear_params *gear,
                            const gs_rig_params *params, gs_error *err);
 gs_status gs_rig_init_rack(gs_rig *rig, const gs_rack_pinion_params *rack,

@@ -17,7 +17,7 @@ from __future__ import annotations
 from ._lib import ffi as _ffi
 from ._lib import lib as _lib
 from .blocks import Block, RackPinion, SimpleGear, make_block
-from .errors import GearsimError, InputError, ModelFileError, ParameterError
+from .errors import GearsimError, InputError, ModelFileError, ParameterError, SubstepWarning
 from .model import Model
 from .params import param_units
 from .rig import INPUT_NAMES, OUTPUT_NAMES, GearRig, RackRig, Rig, RigResult, RigSnapshot
@@ -48,6 +48,7 @@ __all__ = [
     "ParameterError",
     "ModelFileError",
     "InputError",
+    "SubstepWarning",
     "TABLE_MAX",
     "MAX_SUBSTEPS",
     "C_VERSION",

@@ -13,6 +13,10 @@
   file.
 - :class:`InputError` (also a :class:`ValueError`): bad per-step or batch inputs
   (missing driving input, shape mismatch, non-finite value).
+
+Warnings: :class:`SubstepWarning` (a :class:`UserWarning`): a rig with backlash
+whose automatic contact sub-step count stopped at its cap while the contact is
+still under-resolved (h*omega_n > 0.5).
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ __all__ = [
     "ParameterError",
     "ModelFileError",
     "InputError",
+    "SubstepWarning",
 ]
 
 
@@ -102,3 +107,10 @@ def with_file(err: GearsimError, file: str | PathLike[str] | None) -> GearsimErr
     if cls is ParameterError:
         cls = _FileParameterError
     return cls(err.detail, parameter=err.parameter, status=err.status, file=file)
+
+
+class SubstepWarning(UserWarning):
+    """The automatic contact sub-step count of a backlash rig stopped at its cap
+    (16) with h*omega_n still above 0.5: the contact is stable (backward Euler)
+    but numerically over-damped, so rebounds come out too soft. Lower ``dt``, or
+    set ``contact_substeps`` (up to 64), or soften the contact."""

@@ -9,7 +9,10 @@ arrays (gs_rig_run) and is bit-identical to the same number of steps.
 from __future__ import annotations
 
 import math
+import os
 import struct
+import sys
+import warnings
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -19,7 +22,20 @@ import numpy as np
 from . import params as P
 from ._lib import INPUT_COLUMNS, OUTPUT_COLUMNS, check, ffi, lib
 from .blocks import Block, RackPinion, SimpleGear
-from .errors import GearsimError, InputError, ParameterError
+from .errors import GearsimError, InputError, ParameterError, SubstepWarning
+
+_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))
+
+
+def _caller_stacklevel() -> int:
+    """warnings.warn's stacklevel of the first frame outside the package, so a
+    warning points at the user's line however deep in gearsim it was raised."""
+    frame = sys._getframe(1)
+    level = 1
+    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
+        frame = frame.f_back
+        level += 1
+    return level
 
 __all__ = ["Rig", "GearRig", "RackRig", "RigResult", "RigSnapshot", "INPUT_NAMES", "OUTPUT_NAMES"]
 
@@ -226,6 +242,19 @@ class Rig:
             return {**block.params, **full, "dt": dt_value}[name]
 
         check(status, err, rename=_c_rig_names(kind), value_of=value_of)
+        info = ffi.new("gs_rig_info *")
+        lib.gs_rig_get_info(rig, info)
+        self._h_omega_n = float(info.contact_h_omega_n)
+        self._substeps_capped = bool(info.substeps_capped)
+        if self._substeps_capped:
+            warnings.warn(
+                f"backlash contact: the automatic sub-step count stopped at "
+                f"{int(info.contact_substeps)} with h*omega_n = {self._h_omega_n:.3g} > 0.5 "
+                f"(dt = {dt_value!r} s): the contact is stable but over-damped; lower dt "
+                f"or set contact_substeps (up to {int(lib.GS_MAX_SUBSTEPS)})",
+                SubstepWarning,
+                stacklevel=_caller_stacklevel(),
+            )
         ambient = full["ambient_temperature"]
         if not (math.isfinite(ambient) and ambient > 0):
             raise ParameterError(
@@ -300,6 +329,18 @@ class Rig:
     def substeps(self) -> int:
         """Contact sub-steps per step chosen by the C rig (backlash)."""
         return int(self._rig.substeps)
+
+    @property
+    def contact_h_omega_n(self) -> float:
+        """h*omega_n of the backlash contact at the chosen sub-step (0 without
+        backlash): <= 0.5 is the automatic target, about 0.05 resolves a rebound."""
+        return self._h_omega_n
+
+    @property
+    def substeps_capped(self) -> bool:
+        """True when the automatic sub-step count stopped at its cap with
+        h*omega_n > 0.5 (a SubstepWarning was issued at construction)."""
+        return self._substeps_capped
 
     def __repr__(self) -> str:
         args = ", ".join(f"{k}={v!r}" for k, v in self._given.items())
