@@ -549,6 +549,96 @@ static void test_backward_euler_residual(void **state)
     run_backward_euler_residual(GS_HARD_STOP_FULL_DAMPED);
 }
 
+/* ---- Static-contact lock (physics.md 4): it engages only on teeth that
+ * are at or beyond a stop and closing or at rest, never while they separate.
+ * A torque-driven rig with one sub-step and a 5 mm/s speed threshold, under
+ * a motor torque and a load that reverse at different rates, engages and
+ * releases the lock many times; every engagement is checked against the
+ * motion of x over that step (the lock is the rig's public state). The rule
+ * before 2026-11 (any slow motion beyond a stop) fails this at step 92. */
+static void test_lock_never_engages_while_separating(void **state)
+{
+    (void)state;
+    gs_simple_gear_params g = gs_simple_gear_params_default();
+    g.backlash.enabled = 1;
+    g.backlash.stiffness_N_m = GS_R(1e5);
+    g.backlash.damping_N_s_m = GS_R(50.0);
+    g.backlash.lock_enabled = 1;
+    g.backlash.contact_speed_threshold_m_s = GS_R(0.005);
+    g.backlash.contact_release_force_N = GS_R(0.0);
+    gs_rig_params rp = gs_rig_params_default();
+    rp.base_drive = GS_BASE_TORQUE_DRIVEN;
+    rp.base_inertia_kg_m2 = GS_R(0.01);
+    rp.driven_inertia = GS_R(0.001);
+    rp.contact_substeps = 1;
+    gs_rig rig;
+    INIT_GEAR_RIG(&rig, &g, &rp);
+    const double half_gap = 0.5 * (double)g.backlash.linear_backlash_m;
+    int engaged = 0;
+    for (int k = 0; k < 4000; ++k) {
+        const double t = 1e-3 * (double)k;
+        gs_rig_input in = {GS_R(0.0), (gs_real)(0.2 * sin(2.0 * TEST_PI * 3.0 * t)),
+                           (gs_real)(0.1 * sin(2.0 * TEST_PI * 5.0 * t + 1.0)), GS_R(293.15), GS_R(293.15)};
+        gs_rig_output out;
+        const int locked_before = rig.mesh.locked;
+        const double x0 = (double)rig.mesh.position;
+        gs_rig_step(&rig, &in, &out);
+        if (!locked_before && rig.mesh.locked) {
+            const double x1 = (double)rig.mesh.position;
+            ++engaged;
+            if (!(fabs(x1) >= half_gap * (1.0 - 1e-6) && x1 * (x1 - x0) >= 0.0)) {
+                fail_msg("step %d: lock engaged with x %.9g -> %.9g (separating or inside the gap)", k, x0, x1);
+            }
+        }
+    }
+    print_message("lock engagements checked: %d\n", engaged);
+    assert_true(engaged >= 10);
+}
+
+/* gs_rig_get_info: the sub-step count, h*omega_n = (dt/n)*sqrt(K*(r_F^2/J_F
+ * (+ r_B^2/J_B))) by hand, and the cap flag of the automatic choice. */
+static void check_info(double stiffness, double follower_inertia, int substeps_param, int expect_n,
+                       int expect_capped)
+{
+    gs_simple_gear_params g = gs_simple_gear_params_default();
+    g.backlash.enabled = 1;
+    g.backlash.stiffness_N_m = (gs_real)stiffness;
+    gs_rig_params rp = gs_rig_params_default();
+    rp.driven_inertia = (gs_real)follower_inertia;
+    rp.contact_substeps = substeps_param;
+    gs_rig rig;
+    INIT_GEAR_RIG(&rig, &g, &rp);
+    gs_rig_info info;
+    gs_rig_get_info(&rig, &info);
+    const double r_f = (double)g.teeth_ratio * (double)g.backlash.base_radius_m;
+    const double h = (double)rp.dt_s / (double)expect_n;
+    const double h_omega_n = h * sqrt(stiffness * r_f * r_f / follower_inertia);
+    assert_int_equal(info.contact_substeps, expect_n);
+    assert_int_equal(info.substeps_capped, expect_capped);
+    assert_true(fabs((double)info.contact_h_omega_n - h_omega_n) <= 1e-5 * h_omega_n);
+}
+
+static void test_rig_info(void **state)
+{
+    (void)state;
+    /* K 1e6, r_F 0.2 m, J_F 0.05: omega_n = 894.4 rad/s; n = 2 gives 0.447 */
+    check_info(1e6, 0.05, 0, 2, 0);
+    /* K 1e9, J_F 1e-4: omega_n = 6.32e5 rad/s; 16 sub-steps leave 39.5 */
+    check_info(1e9, 1e-4, 0, GS_AUTO_SUBSTEPS_MAX, 1);
+    /* the same, chosen by the user: no cap to report */
+    check_info(1e9, 1e-4, 64, 64, 0);
+    /* rigid: one step, nothing to resolve */
+    gs_simple_gear_params g = gs_simple_gear_params_default();
+    gs_rig_params rp = gs_rig_params_default();
+    gs_rig rig;
+    INIT_GEAR_RIG(&rig, &g, &rp);
+    gs_rig_info info;
+    gs_rig_get_info(&rig, &info);
+    assert_int_equal(info.contact_substeps, 1);
+    assert_int_equal(info.substeps_capped, 0);
+    assert_true(!(info.contact_h_omega_n > GS_R(0.0)) && !(info.contact_h_omega_n < GS_R(0.0)));
+}
+
 typedef struct {
     gs_hard_stop_model model;
     int substeps;
@@ -578,6 +668,8 @@ int main(void)
         cmocka_unit_test(test_rebound_damping),
         cmocka_unit_test(test_no_pull),
         cmocka_unit_test(test_backward_euler_residual),
+        cmocka_unit_test(test_lock_never_engages_while_separating),
+        cmocka_unit_test(test_rig_info),
         /* hard stop (smooth, full_undamped, full_damped) x (automatic sub-steps,
          * one sub-step, automatic with a load) */
         {"test_stiff_smooth_auto_substeps", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[0]},
