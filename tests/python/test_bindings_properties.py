@@ -10,6 +10,10 @@ from hypothesis import strategies as st
 
 import gearsim
 
+# random stiff contacts on light sides hit the sub-step cap by design; the
+# warning itself is tested in test_bindings_rig.py
+pytestmark = pytest.mark.filterwarnings("ignore::gearsim.SubstepWarning")
+
 # Derandomized by default, so that the suite gives the same verdict on every run;
 # GEARSIM_HYPOTHESIS_EXPLORE=1 draws new examples (and uses the example database).
 EXPLORE = bool(os.environ.get("GEARSIM_HYPOTHESIS_EXPLORE"))
@@ -279,37 +283,6 @@ _KNOWN_NEGATIVE_LOSS = {
         ),
         {"base_torque": [0.0142, 0.1138], "load": 0.0},
     ),
-    # smooth hard stop with the contact lock, two sub-steps, torque-driven
-    "smooth_lock_two_substeps": (
-        dict(
-            teeth_ratio=3.899525107472887,
-            base_radius=0.16861289355397557,
-            viscous_coefficients=[0.007625678439116423, 0.001],
-            backlash_enabled=True,
-            hard_stop_model="smooth",
-            linear_backlash=1e-3,
-            transition_region=0.00031350387101206653,
-            stiffness=1e7,
-            damping=266.9173388492512,
-            initial_backlash_position=0.00037478847984678,
-            contact_no_pull=False,
-            contact_lock_enabled=True,
-            contact_speed_threshold=1e-3,
-            contact_release_force=1e-3,
-            follower_inertia=0.001,
-            load_coulomb_friction=0.21779300771107715,
-            load_offset=2e-12,
-            accel_filter_time_constant=0.01,
-            contact_substeps=2,
-            base_drive="torque",
-            base_inertia=0.04757537434318529,
-            dt=2e-3,
-        ),
-        {
-            "base_torque": [-0.001288252839706812, 0.003834114189428338],
-            "load": [0.650567869843909, 0.6505427007873472],
-        },
-    ),
 }
 
 
@@ -321,14 +294,47 @@ def test_first_contact_on_a_jump_has_no_negative_loss():
     assert np.all(out.loss_power >= 0.0), out.loss_power
 
 
+# smooth hard stop without the no-pull clip, two sub-steps, torque-driven: found by a
+# random search over torque-driven rigs (2026-11-25); present before and after the
+# stick-slip change of the rig
+_NO_PULL_OFF = dict(
+    teeth_ratio=6.731394915775876,
+    base_radius=0.19987989774176879,
+    viscous_coefficients=[0.009536333395616266, 0.001],
+    backlash_enabled=True,
+    hard_stop_model="smooth",
+    linear_backlash=1e-3,
+    transition_region=7.351477500472427e-05,
+    stiffness=7663541.86215809,
+    damping=74.22062198909131,
+    initial_backlash_position=0.00031076953079191305,
+    contact_no_pull=False,
+    follower_inertia=0.00025816738943159587,
+    contact_substeps=2,
+    base_drive="torque",
+    base_inertia=0.00811006197351084,
+    dt=2e-3,
+)
+
+
 @pytest.mark.xfail(
     reason="C core, known limit: with contact_no_pull = false the smooth law pulls while "
     "the teeth separate, the contact residual is not monotone, and the bracketed Newton "
-    "solve can stop short of the root: the contact damping power (f - f_spring)*u is then "
-    "slightly negative (about -1e-6 W here); the energy over the run still balances",
+    "solve can end off the root: the force it returns (the impulse balance) then differs "
+    "from the law, the contact damping power (f - f_spring)*u goes negative (-2.4 W here, "
+    "port power +0.2 W) and the contact spring gains energy the ports did not supply",
     strict=True,
 )
 def test_known_negative_contact_loss_power_without_no_pull():
-    params, inputs = _KNOWN_NEGATIVE_LOSS["smooth_lock_two_substeps"]
-    out = gearsim.GearRig(**params).run(**inputs)
-    assert np.all(out.loss_power >= 0.0), out.loss_power
+    rng = np.random.default_rng(0)
+    inputs = {"base_torque": rng.normal(0, 0.05, 40), "load": rng.normal(0, 0.5, 40)}
+    out = gearsim.GearRig(**_NO_PULL_OFF).run(**inputs)
+    assert np.all(out.loss_power >= 0.0), out.loss_power.min()
+
+
+def test_no_pull_default_keeps_that_rig_passive():
+    """The same rig and inputs with the default no-pull clip: no negative loss."""
+    rng = np.random.default_rng(0)
+    inputs = {"base_torque": rng.normal(0, 0.05, 40), "load": rng.normal(0, 0.5, 40)}
+    out = gearsim.GearRig(**{**_NO_PULL_OFF, "contact_no_pull": True}).run(**inputs)
+    assert np.all(out.loss_power >= 0.0), out.loss_power.min()

@@ -349,3 +349,32 @@ def test_step_after_copy_restore_and_reset():
     before = rig.snapshot().state
     clone.step(base_speed=1.0)
     assert rig.snapshot().state == before
+
+
+def test_substep_cap_warns_with_the_figure():
+    """A stiff contact on a light follower at dt = 1 ms: 16 automatic sub-steps
+    leave h*omega_n = 1e-3/16 * sqrt(1e9 * 0.2**2 / 1e-4) = 39.5 (by hand), above
+    the 0.5 target, so the rig warns and reports the figure."""
+    with pytest.warns(gearsim.SubstepWarning, match=r"h\*omega_n = 39\.5"):
+        rig = gearsim.GearRig(backlash_enabled=True, stiffness=1e9, follower_inertia=1e-4)
+    assert rig.substeps == 16
+    assert rig.substeps_capped
+    assert rig.contact_h_omega_n == pytest.approx(1e-3 / 16 * (1e9 * 0.2**2 / 1e-4) ** 0.5, rel=1e-9)
+
+
+def test_no_substep_warning_when_resolved_or_chosen():
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        # defaults: omega_n = sqrt(1e6 * 0.04 / 0.05) = 894 rad/s, 2 sub-steps give 0.447
+        rig = gearsim.GearRig(backlash_enabled=True)
+        # the same stiff rig with the count chosen by the user: nothing to report
+        chosen = gearsim.GearRig(
+            backlash_enabled=True, stiffness=1e9, follower_inertia=1e-4, contact_substeps=64
+        )
+        rigid = gearsim.GearRig()
+    assert rig.substeps == 2 and not rig.substeps_capped
+    assert rig.contact_h_omega_n == pytest.approx(0.5e-3 * (1e6 * 0.04 / 0.05) ** 0.5, rel=1e-9)
+    assert chosen.substeps == 64 and not chosen.substeps_capped
+    assert rigid.contact_h_omega_n == 0.0 and rigid.substeps == 1
