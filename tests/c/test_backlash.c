@@ -549,6 +549,74 @@ static void test_backward_euler_residual(void **state)
     run_backward_euler_residual(GS_HARD_STOP_FULL_DAMPED);
 }
 
+/* ---- Block level, steady contact (physics.md 4.6, "Meshing loss with
+ * backlash"): once the teeth rest against each other, the block with backlash
+ * passes on the torques of the rigid law. g = 2, opposite rotation (s = -1),
+ * r_B = 0.1 m, r_F = 0.2 m, D = 0, no viscous losses: the contact force f
+ * gives T_B = r_B*f and the loss-free T_F0 = -s*r_F*f, and by hand
+ *   constant efficiency, base drives:     T_F = eta*T_F0  (|T_F| = eta*g*|T_B|)
+ *   constant efficiency, follower drives: T_F = T_F0/eta  (g*|T_B| = eta*|T_F|)
+ *   load-dependent (2.6), omega_F > 0:   T_F = (T_F0 + C0)/(1 - k)
+ *                          omega_F < 0:   T_F = (T_F0 - C0)/(1 + k)
+ * with C0 = g*tau_idle, k = 1/eta_nom - 1 - g*tau_idle/tau_nom (2.5). */
+static double steady_block_follower_torque(gs_friction_model model, double eta, double w_b,
+                                           double *contact_force, double *base_torque)
+{
+    gs_simple_gear_params g = gs_simple_gear_params_default();
+    g.friction_model = model;
+    g.efficiency_const = (gs_real)eta;
+    g.idle_torque_Nm = R(0.5);
+    g.nominal_output_torque_Nm = R(20.0);
+    g.efficiency_nominal = R(0.8);
+    g.backlash.enabled = 1;
+    g.backlash.damping_N_s_m = R(0.0);
+    gs_simple_gear gear;
+    INIT_GEAR(&gear, &g);
+    gs_gear_ports_out out;
+    /* close the gap: the base tooth advances 0.1 m/s against a held follower */
+    for (int k = 0; k < 7; ++k) {
+        const gs_gear_ports_in in = {R(1.0), R(0.0), R(0.0), R(0.0), R(300.0), 0};
+        gs_simple_gear_step(&gear, R(1e-3), &in, &out);
+    }
+    /* then turn together (v = r_B*w_B - s*r_F*w_F = 0): x and f stay put */
+    for (int k = 0; k < 5; ++k) {
+        const gs_gear_ports_in in = {(gs_real)w_b, (gs_real)(-w_b / 2.0), R(0.0), R(0.0), R(300.0), 0};
+        gs_simple_gear_step(&gear, R(1e-3), &in, &out);
+    }
+    *contact_force = (double)out.contact_force_N;
+    *base_torque = (double)out.base_torque_Nm;
+    return (double)out.follower_torque_Nm;
+}
+
+static void test_block_steady_contact_rigid_torques(void **state)
+{
+    (void)state;
+    const double etas[3] = {0.9, 0.5, 0.3};
+    for (int i = 0; i < 3; ++i) {
+        for (int dir = 0; dir < 2; ++dir) {
+            /* w_B = +10: omega_F = -5, T_F0 > 0, base drives; w_B = -10: follower drives */
+            const double w_b = dir == 0 ? 10.0 : -10.0;
+            double f, t_b;
+            const double t_f = steady_block_follower_torque(GS_FRICTION_CONSTANT_EFFICIENCY, etas[i], w_b, &f, &t_b);
+            const double t_f0 = 0.2 * f;
+            assert_true(f > 100.0); /* the teeth are in contact */
+            ASSERT_NEAR(t_b, 0.1 * f, TOL_REL, 0.0);
+            const double want = dir == 0 ? etas[i] * t_f0 : t_f0 / etas[i];
+            ASSERT_NEAR(t_f, want, TOL_REL, 0.0);
+        }
+    }
+    const double c0 = 2.0 * 0.5;
+    const double k = 1.0 / 0.8 - 1.0 - 2.0 * 0.5 / 20.0;
+    for (int dir = 0; dir < 2; ++dir) {
+        const double w_b = dir == 0 ? 10.0 : -10.0; /* omega_F = -5 or +5 */
+        double f, t_b;
+        const double t_f = steady_block_follower_torque(GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY, 0.9, w_b, &f, &t_b);
+        const double t_f0 = 0.2 * f;
+        const double want = dir == 0 ? (t_f0 - c0) / (1.0 + k) : (t_f0 + c0) / (1.0 - k);
+        ASSERT_NEAR(t_f, want, TOL_REL, 0.0);
+    }
+}
+
 /* ---- Static-contact lock (physics.md 4): it engages only on teeth that
  * are at or beyond a stop and closing or at rest, never while they separate.
  * A torque-driven rig with one sub-step and a 5 mm/s speed threshold, under
@@ -668,6 +736,7 @@ int main(void)
         cmocka_unit_test(test_rebound_damping),
         cmocka_unit_test(test_no_pull),
         cmocka_unit_test(test_backward_euler_residual),
+        cmocka_unit_test(test_block_steady_contact_rigid_torques),
         cmocka_unit_test(test_lock_never_engages_while_separating),
         cmocka_unit_test(test_rig_info),
         /* hard stop (smooth, full_undamped, full_damped) x (automatic sub-steps,
