@@ -11,6 +11,8 @@
 #      in docs/hardening.md.
 # Each part is bounded in time; exits non-zero when any part fails.
 # Environment: FUZZ_SECONDS (per target and precision, default 30),
+# FUZZ_RUNS (a campaign bounded by executions instead: e.g. 10000000 per
+# target and precision, docs/hardening.md "Long campaign"),
 # HARDENING_FUZZ_STRICT=1 (build the targets with -DFZ_STRICT: no parameter
 # envelope, energy bound with meshing loss, no conditioning gate),
 # HARDENING_BUILD_DIR (default build/hardening), HARDENING_SKIP (space-separated
@@ -21,6 +23,11 @@ root=$PWD
 t_start=$(date +%s)
 out=${HARDENING_BUILD_DIR:-build/hardening}
 fuzz_seconds=${FUZZ_SECONDS:-30}
+fuzz_runs=${FUZZ_RUNS:-}
+if [ -n "$fuzz_runs" ] && ! [[ "$fuzz_runs" =~ ^[1-9][0-9]*$ ]]; then
+  echo "hardening.sh: FUZZ_RUNS must be a positive integer, got '$fuzz_runs'" >&2
+  exit 2
+fi
 skip=" ${HARDENING_SKIP:-} "
 jobs=$(nproc 2>/dev/null || echo 2)
 mkdir -p "$out"
@@ -104,7 +111,12 @@ EOF
 fi
 
 # ---- 3. libFuzzer
-section "3. libFuzzer targets (${fuzz_seconds}s per target and precision)"
+if [ -n "$fuzz_runs" ]; then
+  fuzz_bound=(-runs="$fuzz_runs"); fuzz_limit=$((fuzz_runs / 100 + 600)); fuzz_what="$fuzz_runs runs"
+else
+  fuzz_bound=(-max_total_time="$fuzz_seconds"); fuzz_limit=$((fuzz_seconds + 60)); fuzz_what="${fuzz_seconds}s"
+fi
+section "3. libFuzzer targets ($fuzz_what per target and precision)"
 if ! skipped fuzz; then
   strict=""; [ "${HARDENING_FUZZ_STRICT:-0}" = 1 ] && strict="-DFZ_STRICT"
   fdir="$out/fuzz"
@@ -123,7 +135,7 @@ if ! skipped fuzz; then
       work="$fdir/corpus-${target}-$precision"
       rm -rf "$work" "$fdir/${target}_$precision-"*; mkdir -p "$work"
       cp "fuzz/corpus/$target/"* "$work/"
-      (cd "$fdir" && timeout $((fuzz_seconds + 60)) "./${target}_$precision" -max_total_time="$fuzz_seconds" \
+      (cd "$fdir" && timeout "$fuzz_limit" "./${target}_$precision" "${fuzz_bound[@]}" \
         -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="${target}_$precision-" \
         "$(basename "$work")" >"${target}_$precision.log" 2>&1) &
       pids+=($!)
@@ -136,7 +148,8 @@ if ! skipped fuzz; then
       corpus=$(ls "$fdir/corpus-${target}-$precision" | wc -l)
       artifacts=$(ls "$fdir/${target}_$precision-"* 2>/dev/null || true)
       if [ "$rc" = 0 ] && [ -z "$artifacts" ]; then
-        pass "$target ($precision${strict:+, strict}): ${execs:-?} executions in ${fuzz_seconds}s, corpus $corpus inputs, no finding"
+        secs=$(grep -a 'Done [0-9]* runs in' "$log" | awk '{print $(NF-1)}')
+        pass "$target ($precision${strict:+, strict}): ${execs:-?} executions in ${secs:-$fuzz_seconds}s, corpus $corpus inputs, no finding"
       else
         grep -a -A3 -E 'property violated|ERROR:|runtime error' "$log" | head -12
         fail "$target ($precision): exit $rc, finding(s): ${artifacts:-none} (reproduce: $fdir/${target}_$precision <file>, FZ_VERBOSE=1 prints the parameters)"
