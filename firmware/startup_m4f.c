@@ -1,6 +1,5 @@
 /* startup_m4f.c - vector table, reset handler and SysTick for the Cortex-M4F
- * test programs (QEMU mps2-an386; docs in ../shared/docs/firmware-notes.md
- * and docs/firmware.md).
+ * test programs (QEMU mps2-an386; docs in docs/firmware.md).
  *
  * Reset: enable the FPU (CP10/CP11 full access in CPACR), dsb/isb, then
  * either newlib's _start (FW_NEWLIB_START: C runtime set-up, semihosting
