@@ -1,6 +1,7 @@
 """What a user would write instead of gearsim, for the benchmark comparison.
 
-The same equations as the C rig (docs/physics.md), written plainly in Python:
+The equations of docs/physics.md that gearsim implements, written plainly in
+Python:
 
 - ``python_loop``: the speed-driven rigid Simple Gear rig with the passive
   constant-efficiency law (eq. 2.2), viscous losses (section 3), the load and
@@ -14,17 +15,33 @@ The same equations as the C rig (docs/physics.md), written plainly in Python:
   state besides the last input speed; with a thermal model or backlash it
   would need a loop again.
 - ``python_loop_full``: the full Simple Gear rig of the C configuration
-  ``sg_full`` (backlash with the smooth hard stop solved by backward Euler
-  and a bracketed Newton iteration in contact sub-steps, the temperature x
-  load efficiency table, the thermal mass with a heat path to ambient,
-  viscous losses, the load's Coulomb friction), one Python step per sample
-  with the algorithm of src/rig.c and src/hard_stop.c. This is what a user
-  who needs backlash or heating writes instead of gearsim: nothing here can
-  be vectorised, because every step depends on the last one.
+  ``sg_full`` (backlash with the smooth hard stop, the temperature x load
+  efficiency table, the thermal mass with a heat path to ambient, viscous
+  losses, the load's Coulomb friction), one Python step per sample, written
+  from docs/physics.md and the decisions of issue 12 as a user would write
+  it: contact sub-steps with the contact by backward Euler (a bracketed
+  Newton iteration), the mesh loss by the corrected rule of physics.md 4.6
+  (D1: T_F = T_F0 + tau_mesh(T_F), on the sign branch), the load's Coulomb
+  friction as a set-valued law by velocity projection (D2), and the thermal
+  mass by explicit Euler per step. The contact scheme is the one
+  include/gearsim/rig.h documents (backward Euler on the contact in a fixed
+  number of sub-steps), and with the mesh loss and the Coulomb friction off
+  it reproduces gearsim to rounding; the loss and the friction are written
+  here from D1/D2 (the loss evaluated explicitly on the previous sub-step's
+  contact force), so with them on it agrees with gearsim to the two schemes'
+  discretisation difference, not bit for bit (tests/python/
+  test_bench_alternatives.py states the figures). This is what a user who
+  needs backlash or heating writes instead of gearsim: nothing here can be
+  vectorised, because every step depends on the last one.
 - ``backlash_ode``: the Simple Gear with backlash (smooth hard stop, eq. 4.5,
   no-pull clip) between the speed-driven base and the follower inertia, as an
-  ODE in (x, omega_F) for ``scipy.integrate.solve_ivp``. The held base speed
-  is the same piecewise-linear ramp between samples that the C rig uses.
+  ODE in (x, omega_F) for ``scipy.integrate.solve_ivp``, with the constant-
+  efficiency mesh loss by the corrected rule (D1, loss factor on T_F0 from
+  the power-flow sign of T_F0*omega_F). The held base speed is the same
+  piecewise-linear ramp between samples that the C rig uses.
+
+For an accurate (and slow) continuous-time reference of every block and
+friction model, see bench/reference.py.
 
 All take the parameters as a plain dict (``GEAR_PARAMS`` or ``FULL_PARAMS``
 below), so that the benchmark builds the gearsim model from the same numbers
@@ -222,8 +239,14 @@ def backlash_ode(
 
     State y = (x, omega_F): x' = r_B*omega_B(t) - s*r_F*omega_F and
     J_F*omega_F' = load - tau_mesh - mu_F*omega_F + s*r_F*f(x, x'), with the
-    smooth hard stop (4.5), the no-pull clip, and the mesh loss of eq. 2.2 on
-    T_F0 = -s*r_F*f. Sample k of the base speed is reached at t = (k+1)*dt
+    smooth hard stop (4.5), the no-pull clip, and the mesh loss by the
+    corrected rule of physics.md 4.6 (D1): the passive constant-efficiency
+    law (2.2) is written in T_F, the follower torque after the loss, so with
+    the loss-free T_F0 = -s*r_F*f the saturated solution of
+    T_F = T_F0 + tau_mesh(T_F) is T_F = eta*T_F0 when the base drives
+    (T_F0*omega_F < 0) and T_F = T_F0/eta when the follower drives; smoothed
+    by t0 = tanh(4*T_F0*omega_F/p_th), tau_mesh = T_F0*t0*(1/eta - 1) for
+    t0 >= 0 and T_F0*t0*(1 - eta) for t0 < 0. Sample k of the base speed is reached at t = (k+1)*dt
     and held from t = 0 to dt (the C rig's convention: the first sample sets
     the speeds, then the speed ramps linearly between samples); the load is
     held over each step. Returns the follower speed at the sample instants
@@ -244,8 +267,9 @@ def backlash_ode(
     j_f = p["follower_inertia"]
     mu_f = p["mu_follower"]
     eta = p["efficiency"]
-    loss_fd = 1.0 - eta
-    loss_bd = 1.0 / eta - 1.0
+    # D1: loss factors on T_F0 (follower drives: T_F = T_F0/eta; base drives: T_F = eta*T_F0)
+    loss_fd0 = 1.0 / eta - 1.0
+    loss_bd0 = 1.0 - eta
     k_tanh = 4.0 / p["power_threshold"]
     ws = np.asarray(base_speed, dtype=np.float64).tolist()
     loads = np.asarray(load, dtype=np.float64).tolist()
@@ -275,7 +299,7 @@ def backlash_ode(
                 f = 0.0  # no pull
         t_f0 = -sr_f * f
         tt = tanh(k_tanh * t_f0 * w_f)
-        tau_mesh = t_f0 * tt * (loss_fd if tt >= 0.0 else loss_bd)
+        tau_mesh = t_f0 * tt * (loss_fd0 if tt >= 0.0 else loss_bd0)
         return [v, (tau_load - tau_mesh - mu_f * w_f - t_f0) / j_f]
 
     t_eval = dt * np.arange(1, n + 1)
@@ -302,12 +326,19 @@ def python_loop_full(
     """The full Simple Gear rig (sg_full), one Python step per sample.
 
     Speed-driven base, follower inertia J_F, and between them the gear with
-    backlash. Each step of dt is cut into n sub-steps of h = dt/n (n as the
-    C rig picks it). In each sub-step:
+    backlash. Each step of dt is cut into n sub-steps of h = dt/n (n: the
+    smallest count with h*omega_n <= 0.5, at most 16, as gearsim documents
+    its automatic choice). In each sub-step:
 
-    1. explicit: the meshing loss tau_mesh of eq. 2.7 on the last contact
-       force (T_F0 = -s*r_F*f, eq. 4.6), with the efficiency from the
-       temperature x load table, and the load's Coulomb friction;
+    1. explicit: the meshing loss of eq. 2.7 from the last contact force by
+       the corrected rule of physics.md 4.6 (D1): with T_F0 = -s*r_F*f
+       (eq. 4.6), th = tanh(4*omega_F/omega_th) and k = 1/eta - 1, the law
+       tau_mesh = k*|T_F|*th written in T_F gives, on the sign branch
+       sigma = sign(T_F0), T_F = T_F0/(1 - sigma*k*th) and
+       tau_mesh = T_F - T_F0 (self-locking, 1 - sigma*k*th <= 0: the loss
+       k*|T_F0|*th instead); eta from the temperature x load table at this
+       step's temperature and the base load |T_F|/g of the previous
+       evaluation (a fixed point that settles in steady contact);
     2. the follower's free motion over h (viscous term implicit), then the
        contact by backward Euler: the relative tooth speed u at the end of
        the sub-step solves Phi(u) = u - u_free + c*f(x + h*u, u) = 0 with
@@ -316,7 +347,13 @@ def python_loop_full(
        it), stopped once a step is below newton_tolerance of the bracket
        scale |u_free| + c*|f0|, at most newton_iterations steps;
     3. if the held loss would reverse the follower, the sub-step again
-       without it; then the speeds, x and the sums of the outputs.
+       without it (the loss can stop the follower, never reverse it);
+    4. the load's Coulomb friction tau_C as a set-valued law (D2), by
+       velocity projection on the follower speed after the contact: if
+       |omega_F| <= h*tau_C/(J_F + h*mu_F) the follower stops (the friction
+       holds it), else that amount is taken off its magnitude. It can stop
+       the follower within a sub-step but never reverse it;
+    5. the speeds, x (eq. 4.2 at the end speeds) and the sums of the outputs.
 
     After the sub-steps, the thermal mass: C*dT/dt = P_loss + (T_amb - T)/R_th
     (ambient term implicit). Returns lists of the base torque (N*m, the mean
@@ -344,7 +381,6 @@ def python_loop_full(
     columns = [[float(row[j]) for row in p["efficiency_matrix"]] for j in range(len(loads))]
     k_mesh = 4.0 / p["speed_threshold"]  # tanh(4*omega_F/omega_th)
     tau_c = p["load_coulomb_friction"]  # N*m
-    k_coulomb = 4.0 / p["load_coulomb_speed_threshold"]
     a_th = dt / p["thermal_mass"]  # K/J
     g_th = 1.0 / p["thermal_resistance"]  # W/K
     t_amb = p["ambient_temperature"]  # K
@@ -359,6 +395,7 @@ def python_loop_full(
     h = dt / n  # s
     jh_f = j_f + h * mu_f  # follower inertia with the implicit viscous term
     c = h * (r_f * r_f / jh_f)  # h/m_eff at the pitch line, s/kg
+    coulomb_step = h * tau_c / jh_f  # the speed the Coulomb friction takes in h, rad/s
 
     def interp(xs: list[float], ys: list[float], at: float) -> float:
         """Linear interpolation; the end values hold outside the table."""
@@ -446,6 +483,7 @@ def python_loop_full(
     w_f = s * w_b / g  # follower speed, rad/s
     x = 0.0  # backlash position, m (centred)
     f_last = 0.0  # contact force of the last sub-step, N
+    t_f_last = 0.0  # T_F of the last loss evaluation, N*m (its base load picks eta)
     temp = p["initial_temperature"]  # K
     for i in range(n_samples):
         w_in = ws[i]
@@ -456,23 +494,41 @@ def python_loop_full(
         sum_tau_b = 0.0
         sum_loss = 0.0
         for k in range(n):
-            # explicit: meshing loss (eq. 2.7) on T_F0 = -s*r_F*f, load friction
+            # explicit: meshing loss (eq. 2.7) by the corrected rule (D1)
             t_f0 = -sr_f * f_last
-            eta = interp(loads, eta_of_load, abs(t_f0) * inv_g)
-            tau_mesh = (1.0 / eta - 1.0) * abs(t_f0) * tanh(k_mesh * w_f)
-            external = tau_load - tau_c * tanh(k_coulomb * w_f)
+            if t_f0 == 0.0:
+                tau_mesh = 0.0
+                t_f_last = 0.0
+            else:
+                eta = interp(loads, eta_of_load, abs(t_f_last) * inv_g)
+                k_loss = 1.0 / eta - 1.0
+                th = tanh(k_mesh * w_f)
+                denominator = 1.0 - (k_loss * th if t_f0 > 0.0 else -k_loss * th)
+                if denominator > 0.0:
+                    t_f_last = t_f0 / denominator
+                    tau_mesh = t_f_last - t_f0
+                else:  # self-locking: no solution on the branch
+                    tau_mesh = k_loss * abs(t_f0) * th
+                    t_f_last = t_f0 + tau_mesh
             # the held base speed ramps linearly from the last sample to this one
             w_b_new = w_b_start + (w_in - w_b_start) * (k + 1) / n
             # free motion of the follower over h, then the contact
-            w_f_free = (j_f * w_f + h * (external - tau_mesh)) / jh_f
+            w_f_free = (j_f * w_f + h * (tau_load - tau_mesh)) / jh_f
             u, f, f_spring = solve_contact(x, r_b * w_b_new - sr_f * w_f_free)
             w_f_new = w_f_free + h * sr_f * f / jh_f
             if tau_mesh * w_f_new < 0.0:
                 # the held loss would reverse the follower: this sub-step without it
                 tau_mesh = 0.0
-                w_f_free = (j_f * w_f + h * external) / jh_f
+                w_f_free = (j_f * w_f + h * tau_load) / jh_f
                 u, f, f_spring = solve_contact(x, r_b * w_b_new - sr_f * w_f_free)
                 w_f_new = w_f_free + h * sr_f * f / jh_f
+            # the load's Coulomb friction (D2): stops the follower or slows it by h*tau_C/J
+            if w_f_new > coulomb_step:
+                w_f_new -= coulomb_step
+            elif w_f_new < -coulomb_step:
+                w_f_new += coulomb_step
+            else:
+                w_f_new = 0.0
             w_b = w_b_new
             w_f = w_f_new
             x += h * (r_b * w_b - sr_f * w_f)  # eq. 4.2 at the end speeds
