@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import tempfile
 from collections.abc import Iterable, Iterator
 from typing import IO, Any
@@ -128,6 +129,17 @@ def _check_writable(directory: str, option: str, shown: str) -> None:
     os.unlink(tmp)
 
 
+def _file_mode(target: str) -> int:
+    """The permissions the written file gets: those of the file it replaces,
+    else what open() would give a new file (0666 minus the umask)."""
+    try:
+        return stat.S_IMODE(os.stat(target).st_mode)
+    except OSError:
+        mask = os.umask(0)
+        os.umask(mask)
+        return 0o666 & ~mask
+
+
 @contextlib.contextmanager
 def atomic_writer(path: str | os.PathLike[str], mode: str = "w", **open_kwargs: Any) -> Iterator[IO[Any]]:
     """A file object writing to a temporary file beside ``path``; renamed over
@@ -137,6 +149,7 @@ def atomic_writer(path: str | os.PathLike[str], mode: str = "w", **open_kwargs: 
     fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(target)}.", suffix=".tmp", dir=directory)
     try:
         with os.fdopen(fd, mode, **open_kwargs) as fh:
+            os.fchmod(fh.fileno(), _file_mode(target))  # not mkstemp's 0600
             yield fh
             fh.flush()
             os.fsync(fh.fileno())

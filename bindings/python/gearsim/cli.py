@@ -5,10 +5,24 @@
     gearsim fit DATA.csv --model MODEL.toml --add EFFECT [--out NEW.toml] [--json]
     gearsim report DATA.csv --model MODEL.toml --out DIR [--rounds N] [--json]
 
-Exit status (docs/measurement-contract.md section 4): 0 on success; 2 on bad
-input (missing file, bad column or value, unknown effect, invalid parameter)
-with one line on standard error naming the file, line, column or key; 1 on an
-internal failure (set GEARSIM_DEBUG=1 for the traceback).
+The files and columns are described in docs/measurement-format.md.
+
+Exit status: 0 on success; 2 on bad input (missing file, bad column or value,
+unknown effect, invalid parameter, an output path that would overwrite an
+input or cannot be written, a usage error of the options) with one line on
+standard error naming the file, line, column, key or option; 1 on an internal
+failure, also one line (set GEARSIM_DEBUG=1 for the traceback); 130 on
+Ctrl-C. No command prints a traceback unless GEARSIM_DEBUG is set.
+
+Standard output closed early (``gearsim compare ... --json | head -c 1``):
+the command stops quietly, prints nothing on standard error and exits with
+status 141 (128 + SIGPIPE, what a shell reports for a program killed by
+SIGPIPE), so that ``set -o pipefail`` still sees that not everything was
+read. When the reader took everything before it closed, the status is 0.
+
+Every message that repeats user data (file names, header cells, values) is
+made printable first (:func:`gearsim._outputs.printable`): control characters
+and raw bytes never reach the terminal.
 
 Other layers add subcommands without editing this file: a module listed in
 ``PLUGIN_MODULES`` (``gearsim.hil.cli`` is one: ``gearsim hil ...``), or an
@@ -35,22 +49,69 @@ __all__ = [
     "PLUGIN_MODULES",
     "EXIT_BAD_INPUT",
     "EXIT_INTERNAL",
+    "EXIT_BROKEN_PIPE",
+    "START_HERE",
 ]
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1
 EXIT_BAD_INPUT = 2
+#: Standard output closed by its reader before everything was written.
+EXIT_BROKEN_PIPE = 141
+EXIT_INTERRUPTED = 130
 
 #: Modules tried for a ``register(subparsers)`` function, in order.
 PLUGIN_MODULES: list[str] = ["gearsim.analysis.commands", "gearsim.hil.cli"]
 
+#: The first lines of ``gearsim --help``.
+START_HERE = """\
+start here:  gearsim compare  data.csv --model model.toml     # the error, overall and per regime
+             gearsim diagnose data.csv --model model.toml     # the missing effect, with evidence
+             gearsim fit      data.csv --model model.toml --add EFFECT --out fitted.toml
+"""
+
+#: Longest error line written on standard error.
+MESSAGE_LIMIT = 600
+
+
+def _one_line(text: object) -> str:
+    """``text`` as one printable line (whitespace runs collapsed, control
+    characters escaped, cut at MESSAGE_LIMIT characters)."""
+    from ._outputs import printable
+
+    return printable(" ".join(str(text).split()), limit=MESSAGE_LIMIT)
+
+
+def _err(line: str) -> None:
+    """One line on stderr; a closed stderr is not an error of its own."""
+    try:
+        sys.stderr.write(line + "\n")
+        sys.stderr.flush()
+    except (OSError, ValueError):
+        pass
+
 
 class _Parser(argparse.ArgumentParser):
-    """argparse, but a usage error is one line on stderr and exit 2."""
+    """argparse, but a usage error is one printable line on stderr and exit 2;
+    the top-level help starts with START_HERE."""
+
+    start_here: str | None = None
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        sys.stderr.write(f"{self.prog}: error: {message}\n")
+        _err(f"{self.prog}: error: {_one_line(message)}")
         raise SystemExit(EXIT_BAD_INPUT)
+
+    def _print_message(self, message: str, file=None) -> None:  # type: ignore[override]
+        # argparse swallows OSError here; a closed stdout must end the command
+        # like any other output does (quietly, EXIT_BROKEN_PIPE)
+        if message:
+            out = file or sys.stderr
+            out.write(message)
+            out.flush()
+
+    def format_help(self) -> str:
+        text = super().format_help()
+        return f"{self.start_here}\n{text}" if self.start_here else text
 
 
 def add_command(
@@ -99,8 +160,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="gearsim",
         description="gearsim: Simple Gear and Rack & Pinion models; "
-        "compare, diagnose and fit them against measurements.",
+        "compare, diagnose and fit them against measurements. Files and columns: "
+        "docs/measurement-format.md; a demo to start with: examples/data/demo_gear.csv "
+        "with examples/data/demo_gear_start.toml.",
     )
+    parser.start_here = START_HERE
     try:
         from . import __version__ as version
     except Exception:  # pragma: no cover
@@ -124,35 +188,75 @@ def _bad_input_types() -> tuple[type[BaseException], ...]:
     return tuple(out)
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the console script; returns the exit status."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    handler = getattr(args, "_handler", None) or getattr(args, "func", None)
-    if handler is None:
-        parser.print_help(sys.stderr)
-        return EXIT_BAD_INPUT
-    prog = f"gearsim {getattr(args, '_command', '') or (argv or sys.argv[1:] or [''])[0]}"
+def _exit_code(code: object) -> int:
+    """The status of a SystemExit code (None -> 0, a message -> 1)."""
+    if code is None:
+        return EXIT_OK
+    if isinstance(code, int):
+        return code
+    _err(_one_line(code))
+    return EXIT_INTERNAL
+
+
+def _run(argv: Sequence[str] | None) -> int:
+    prog = "gearsim"
     try:
+        parser = build_parser()
+        try:
+            args = parser.parse_args(argv)
+        except SystemExit as exc:  # --help, --version, a usage error (already reported)
+            return _exit_code(exc.code)
+        handler = getattr(args, "_handler", None) or getattr(args, "func", None)
+        if handler is None:
+            parser.print_help(sys.stderr)
+            return EXIT_BAD_INPUT
+        words = list(sys.argv[1:] if argv is None else argv) or [""]
+        prog = f"gearsim {getattr(args, '_command', '') or words[0]}"
         return int(handler(args) or 0)
+    except BrokenPipeError:
+        raise  # main() ends quietly
     except _bad_input_types() as exc:
-        msg = " ".join(str(exc).split())
-        sys.stderr.write(f"{prog}: error: {msg}\n")
+        _err(f"{_one_line(prog)}: error: {_one_line(exc)}")
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
-        sys.stderr.write(f"{prog}: interrupted\n")
-        return 130
-    except BrokenPipeError:  # pragma: no cover
-        return EXIT_INTERNAL
+        if os.environ.get("GEARSIM_DEBUG"):
+            raise
+        _err(f"{_one_line(prog)}: interrupted")
+        return EXIT_INTERRUPTED
     except Exception as exc:  # internal failure: one line, traceback only on request
         if os.environ.get("GEARSIM_DEBUG"):
             raise
-        msg = " ".join(str(exc).split())
-        sys.stderr.write(
-            f"{prog}: internal error: {type(exc).__name__}: {msg} "
-            f"(set GEARSIM_DEBUG=1 for the traceback)\n"
+        _err(
+            f"{_one_line(prog)}: internal error: {type(exc).__name__}: {_one_line(exc)} "
+            f"(set GEARSIM_DEBUG=1 for the traceback)"
         )
         return EXIT_INTERNAL
+
+
+def _stdout_to_devnull() -> None:
+    """Point the stdout file descriptor at /dev/null, so that the flush at
+    interpreter shutdown does not print 'Exception ignored ... BrokenPipeError'."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        return  # not a real file (captured in a test): nothing is flushed at exit
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, fd)
+    finally:
+        os.close(devnull)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the console script; returns the exit status (argparse's
+    exits, --help and usage errors included, are returned, not raised)."""
+    try:
+        status = _run(argv)
+        sys.stdout.flush()  # a reader that left shows here, not at shutdown
+    except BrokenPipeError:
+        _stdout_to_devnull()
+        return EXIT_BROKEN_PIPE
+    return status
 
 
 if __name__ == "__main__":

@@ -4,6 +4,20 @@ A thin shell over gearsim.analysis: parse arguments, load and check the model
 and the measurement (all input is checked before anything is written), call
 the function, print a table or exactly one JSON object on stdout. Progress
 goes to stderr (silence it with --quiet), never into the JSON.
+
+Outputs (``fit --out``, ``report --out``) are checked by
+:func:`gearsim._outputs.check_output` first thing in the handler, before any
+input is read: an empty path, an input of the command, a directory where a
+file is wanted (or the reverse), a missing or unwritable directory end the
+command at once with exit status 2. Every file is written atomically
+(:func:`gearsim._outputs.atomic_writer`) and only after the work succeeded.
+
+Options that would silently give a wrong answer are refused: an
+``--input-filter`` cut-off at or above the Nyquist frequency of the data,
+negative or fractional counts (``--rounds``, ``--top``, ``--max-samples``,
+``--max-gap``). The loader's notes on how the data was read or changed
+(separator, units, ``--resample``) and its warnings are printed on stderr, one
+line each, even with --quiet.
 """
 
 from __future__ import annotations
@@ -14,20 +28,48 @@ import math
 import os
 import sys
 import time
+from collections.abc import Iterable
 from typing import Any
 
+from .._outputs import OutputPathError, atomic_write_text, check_output, printable
+
 __all__ = ["register"]
+
+FORMAT_DOC = "docs/measurement-format.md"
+#: Default of --max-gap: longest run of missing samples --resample fills.
+DEFAULT_MAX_GAP = 10
 
 
 # ---------------------------------------------------------------- shared
 
 
+def _count(minimum: int):
+    """argparse type: a whole number >= minimum (a negative or fractional
+    count is refused, not clamped)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(str(text).strip(), 10)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"must be a whole number >= {minimum}, got '{printable(text)}'"
+            ) from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(
+                f"must be a whole number >= {minimum}, got {value}"
+            )
+        return value
+
+    parse.__name__ = f"whole number >= {minimum}"
+    return parse
+
+
 def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument(
-        "data", metavar="DATA.csv", help="measurement CSV (docs/measurement-contract.md section 1)"
+        "data", metavar="DATA.csv", help=f"measurement CSV (columns: {FORMAT_DOC})"
     )
     p.add_argument(
-        "--model", required=True, metavar="MODEL.toml", help="model file (contract section 2)"
+        "--model", required=True, metavar="MODEL.toml", help=f"model file ({FORMAT_DOC})"
     )
     p.add_argument("--json", action="store_true", help="print exactly one JSON object on stdout")
     p.add_argument(
@@ -41,14 +83,24 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--resample",
         action="store_true",
-        help="interpolate non-uniformly sampled data onto a uniform grid instead of refusing it",
+        help="interpolate non-uniformly sampled data onto a uniform grid instead of refusing "
+        "it (what was filled is said on stderr)",
+    )
+    p.add_argument(
+        "--max-gap",
+        type=_count(0),
+        default=DEFAULT_MAX_GAP,
+        metavar="N",
+        help="with --resample: refuse to interpolate across a gap of more than N missing "
+        f"samples (default {DEFAULT_MAX_GAP}); 0 fills every gap",
     )
     p.add_argument(
         "--input-filter",
         default="auto",
         metavar="auto|none|HZ",
         help="zero-phase low-pass on the measured inputs before they drive the rig: 'auto' "
-        "(cut-off from each input's spectrum, default), 'none', or a cut-off in Hz",
+        "(cut-off from each input's spectrum, default), 'none', or a cut-off in Hz below the "
+        "Nyquist frequency 0.5/dt of the data",
     )
     p.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
 
@@ -77,26 +129,100 @@ def _input_filter(value: str):
         hz = float(v)
     except ValueError:
         raise MeasurementError(
-            f"--input-filter must be auto, none or a frequency in Hz, got '{value}'"
+            f"--input-filter must be auto, none or a frequency in Hz, got '{printable(value)}'"
         ) from None
     if not (hz > 0 and math.isfinite(hz)):
-        raise MeasurementError(f"--input-filter must be a positive frequency in Hz, got '{value}'")
+        raise MeasurementError(
+            f"--input-filter must be a positive frequency in Hz, got '{printable(value)}'"
+        )
     return hz
 
 
-def _load(args: argparse.Namespace):
-    """Model and measurement, both checked (exit 2 on any problem)."""
+def _check_cutoff(filt: Any, meas: Any, text: str) -> None:
+    """A fixed cut-off at or above the Nyquist frequency filters nothing
+    (zero_phase_lowpass returns the signal as is): refuse it."""
+    from .errors import MeasurementError
+
+    if not isinstance(filt, float):
+        return
+    nyquist = 0.5 / meas.dt
+    if filt >= nyquist:
+        raise MeasurementError(
+            f"--input-filter {printable(text)} Hz is at or above the Nyquist frequency "
+            f"{nyquist:.6g} Hz of {printable(meas.path)} (0.5/dt, dt = {meas.dt:.6g} s): it "
+            "would filter nothing; give a cut-off below it, or none"
+        )
+
+
+def _check_magnitudes(model: Any, path: str) -> None:
+    """The analysis simulates and fits: a model parameter beyond the supported
+    magnitude (1e12 in SI units, as for measured values) overflows the
+    simulation or the fit's scaling. The C core accepts any finite value whose
+    reciprocal fits (docs/hardening.md, L1); the analysis refuses with the key."""
+    from ..errors import ModelFileError
+    from .measurement import MAX_MAGNITUDE
+
+    for section, params in (("block", model.block_params), ("rig", model.rig_params)):
+        for key, value in params.items():
+            values = value if isinstance(value, (list, tuple)) else [value]
+            flat = [v for row in values for v in (row if isinstance(row, (list, tuple)) else [row])]
+            for v in flat:
+                if isinstance(v, (int, float)) and not isinstance(v, bool) and abs(v) > MAX_MAGNITUDE:
+                    raise ModelFileError(
+                        f"{key} = {v:g} ([{section}]) is beyond the supported magnitude "
+                        f"{MAX_MAGNITUDE:g} (SI units)",
+                        file=printable(path, limit=200),
+                        parameter=key,
+                    )
+
+
+def _load(args: argparse.Namespace, filt: Any = None, check: Any = None):
+    """Model and measurement, both checked (exit 2 on any problem), the fixed
+    --input-filter cut-off checked against the data's Nyquist frequency, and
+    check(model) if given. The loader's notes are printed on stderr only once
+    every check passed: a refusal stays one line."""
     from .. import Model
     from ..errors import ModelFileError
     from .measurement import load_measurement, parse_column_map
 
     if not os.path.exists(args.model):
-        raise ModelFileError("no such file", file=args.model)
+        raise ModelFileError("no such file", file=printable(args.model, limit=200))
     model = Model.load(args.model)
+    _check_magnitudes(model, args.model)
+    notes: list[str] = []  # how the file was read or changed, and warnings
     meas = load_measurement(
-        args.data, model.block, columns=parse_column_map(args.column), resample=args.resample
+        args.data,
+        model.block,
+        columns=parse_column_map(args.column),
+        resample=args.resample,
+        max_gap=args.max_gap,
+        note=notes.append,
     )
+    _check_cutoff(filt, meas, args.input_filter)
+    if check is not None:
+        check(model)
+    for text in notes:  # said even with --quiet: they change what the data means
+        sys.stderr.write(f"gearsim {args._command}: note: {printable(text, limit=600)}\n")
     return model, meas
+
+
+def _check_out(
+    args: argparse.Namespace, *, directory: bool = False, files: Iterable[str] = ()
+) -> str:
+    """check_output on --out before any work; for a directory, also each file
+    the command will write in it (none may be an input or a directory)."""
+    inputs = [args.data, args.model]
+    if args.out is not None and str(args.out).strip() == "-":
+        raise OutputPathError(
+            f"--out -: gearsim {args._command} cannot write to standard output; name a "
+            + ("directory" if directory else "file"),
+            parameter="--out",
+        )
+    out = check_output(args.out, inputs, option="--out", directory=directory)
+    if directory and os.path.isdir(out):
+        for name in files:
+            check_output(os.path.join(out, name), inputs, option="--out")
+    return out
 
 
 def _clean(obj: Any) -> Any:
@@ -124,24 +250,15 @@ def _emit_json(obj: dict) -> None:
     sys.stdout.flush()
 
 
-def _out_dir(path: str) -> str:
-    """The directory a --out file goes to; exit 2 when it does not exist."""
-    d = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(d):
-        from ..errors import ModelFileError
-
-        raise ModelFileError("the directory for --out does not exist", file=path)
-    return d
-
-
 def _write_model_atomic(model: Any, path: str) -> None:
-    tmp = os.path.join(_out_dir(path), f".{os.path.basename(path)}.tmp{os.getpid()}")
+    """The model's TOML, written atomically; a failure (the directory went
+    away, the disk is full) is one line naming the file."""
     try:
-        model.save(tmp)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+        atomic_write_text(path, model.dumps())
+    except OSError as exc:
+        raise OutputPathError(
+            f"--out {printable(path)}: cannot write ({exc.strerror or exc})", parameter="--out"
+        ) from None
 
 
 def _g(x: Any) -> str:
@@ -160,7 +277,10 @@ def _compare_args(p: argparse.ArgumentParser) -> None:
 
 def _print_compare(res) -> None:
     meas = res.meas
-    print(f"{meas.path}: {meas.n} samples, dt = {meas.dt:.6g} s; model block {meas.block}")
+    print(
+        f"{printable(meas.path, limit=200)}: {meas.n} samples, dt = {meas.dt:.6g} s; "
+        f"model block {meas.block}"
+    )
     print(
         f"{'output':16s} {'nrmse':>8s} {'fit %':>7s} {'rmse':>10s} "
         f"{'max |err|':>10s} {'at t (s)':>9s}"
@@ -196,7 +316,7 @@ def _compare(args: argparse.Namespace) -> int:
 
     say = _progress(args)
     filt = _input_filter(args.input_filter)
-    model, meas = _load(args)
+    model, meas = _load(args, filt)
     say(f"compare: {meas.n} samples")
     res = compare(model, meas, input_filter=filt)
     if args.json:
@@ -213,7 +333,7 @@ def _diagnose_args(p: argparse.ArgumentParser) -> None:
     _common(p)
     p.add_argument(
         "--top",
-        type=int,
+        type=_count(1),
         default=3,
         metavar="N",
         help="fit the N best screened candidates on the simulation (default 3)",
@@ -254,10 +374,8 @@ def _diagnose(args: argparse.Namespace) -> int:
 
     say = _progress(args)
     filt = _input_filter(args.input_filter)
-    model, meas = _load(args)
-    res = diagnose(
-        model, meas, input_filter=filt, top=max(1, args.top), fit=not args.no_fit, progress=say
-    )
+    model, meas = _load(args, filt)
+    res = diagnose(model, meas, input_filter=filt, top=args.top, fit=not args.no_fit, progress=say)
     if args.json:
         _emit_json(res.to_json())
     else:
@@ -279,13 +397,16 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
         "load_offset",
     )
     p.add_argument(
-        "--out", metavar="NEW.toml", help="write the model with the effect added and fitted"
+        "--out",
+        metavar="NEW.toml",
+        help="write the model with the effect added and fitted (atomically, after the fit; "
+        "never over DATA.csv or MODEL.toml)",
     )
     p.add_argument(
         "--max-samples",
-        type=int,
+        type=_count(1),
         metavar="N",
-        help="fit on the first N samples only (errors are still reported on all)",
+        help="fit on the first N samples only, at least 200 (errors are still reported on all)",
     )
 
 
@@ -312,16 +433,16 @@ def _fit(args: argparse.Namespace) -> int:
     from . import fit
     from .effects import get_effect
 
+    if args.out is not None:
+        _check_out(args)  # before anything is read, not after minutes of work
     say = _progress(args)
     filt = _input_filter(args.input_filter)
-    model, meas = _load(args)
-    get_effect(args.add, model)  # unknown / inapplicable effect: exit 2 before any work
-    if args.out:
-        _out_dir(args.out)  # before the fit, not after minutes of work
+    # an unknown / inapplicable effect: exit 2 before any work
+    model, meas = _load(args, filt, check=lambda m: get_effect(args.add, m))
     res = fit(model, meas, args.add, input_filter=filt, max_samples=args.max_samples, progress=say)
-    if args.out:
+    if args.out is not None:
         _write_model_atomic(res.model, args.out)
-        say(f"wrote {args.out}")
+        say(f"wrote {printable(args.out, limit=200)}")
     if args.json:
         out = res.to_json()
         if args.out:
@@ -338,11 +459,15 @@ def _fit(args: argparse.Namespace) -> int:
 def _report_args(p: argparse.ArgumentParser) -> None:
     _common(p)
     p.add_argument(
-        "--out", required=True, metavar="DIR", help="directory for report.html and the PNG files"
+        "--out",
+        required=True,
+        metavar="DIR",
+        help="directory for report.html and the PNG files (created if missing, in an existing "
+        "directory; files of the same name in it are replaced, inputs never)",
     )
     p.add_argument(
         "--rounds",
-        type=int,
+        type=_count(0),
         default=0,
         metavar="N",
         help="rounds of diagnose -> fit the best effect before drawing (default 0: the "
@@ -355,12 +480,16 @@ def _report_args(p: argparse.ArgumentParser) -> None:
 
 
 def _report(args: argparse.Namespace) -> int:
-    from .report import run_rounds, write_report
+    from .report import FIGURES, run_rounds, write_report
 
+    files = [f"{name}.png" for name in FIGURES] + ["report.html"]
+    if args.save_models:
+        files += [f"model-round-{i}.toml" for i in range(args.rounds + 1)]
+    _check_out(args, directory=True, files=files)  # before anything is read
     say = _progress(args)
     filt = _input_filter(args.input_filter)
-    model, meas = _load(args)
-    rounds = run_rounds(model, meas, rounds=max(0, args.rounds), input_filter=filt, progress=say)
+    model, meas = _load(args, filt)
+    rounds = run_rounds(model, meas, rounds=args.rounds, input_filter=filt, progress=say)
     paths = write_report(
         args.out,
         meas,
@@ -385,7 +514,7 @@ def _report(args: argparse.Namespace) -> int:
             print(
                 f"round {s['round']}: {s['effect'] or 'model as given':34s} nrmse {s['nrmse']:.4f}"
             )
-        print(f"wrote {paths['html']}")
+        print(f"wrote {printable(paths['html'], limit=200)}")
     return 0
 
 

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from .._outputs import OutputPathError, atomic_write_bytes, atomic_write_text, printable
 from .compare import CompareResult, compare
 from .diagnose import DiagnoseResult, diagnose
 from .fitting import FitResult, fit_effect
@@ -423,7 +424,7 @@ def _html(meas: Measurement, rounds: list[Round], images: dict[str, bytes], titl
     h.append(
         "<p class='small'>nrmse = rms(measured - simulated) / std(measured) per output; the "
         "overall nrmse "
-        "is their mean (docs/measurement-contract.md). Standard deviations come from the "
+        "is their mean (docs/measurement-format.md). Standard deviations come from the "
         "Jacobian and "
         "are lower bounds when the residual is correlated in time.</p></body></html>"
     )
@@ -469,8 +470,13 @@ def write_report(
     progress: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
     """Draw the figures of FIGURES into out_dir/*.png and out_dir/report.html
-    (self-contained). Returns {"html": path, "images": [paths]}."""
+    (self-contained), each file written atomically; out_dir is created when
+    missing and must not be a file. Returns {"html": path, "images": [paths]}."""
     say = progress or (lambda s: None)
+    if os.path.exists(out_dir) and not os.path.isdir(out_dir):
+        raise OutputPathError(
+            f"--out {printable(out_dir)}: exists and is not a directory", parameter="--out"
+        )
     plt = _plt()
     os.makedirs(out_dir, exist_ok=True)
     images: dict[str, bytes] = {}
@@ -484,11 +490,9 @@ def write_report(
         plt.close(fig)
         images[name] = buf.getvalue()
         p = os.path.join(out_dir, f"{name}.png")
-        with open(p, "wb") as fh:
-            fh.write(images[name])
+        atomic_write_bytes(p, images[name])
         paths.append(p)
         say(f"report: drew {name}.png")
     page = os.path.join(out_dir, "report.html")
-    with open(page, "w", encoding="utf-8") as fh:
-        fh.write(_html(meas, rounds, images, title))
+    atomic_write_text(page, _html(meas, rounds, images, title))
     return {"html": page, "images": paths}

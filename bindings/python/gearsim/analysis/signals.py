@@ -12,13 +12,27 @@ is the median power density in the upper half of the band; the cut-off is twice
 the highest frequency whose (smoothed) density still stands 30x above that
 floor, clamped to [fs/500, fs/8]. Quantized or noisy speeds get filtered where
 they are only noise; clean signals are barely touched.
+
+``sampling_gaps`` finds the holes of a time axis (runs of missing samples of
+the median step), so that resampling can refuse to invent data across a long
+one (``gearsim --resample --max-gap N``) and say what it filled.
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
-__all__ = ["zero_phase_lowpass", "auto_cutoff", "derivative", "smooth_sign"]
+__all__ = [
+    "zero_phase_lowpass",
+    "auto_cutoff",
+    "derivative",
+    "smooth_sign",
+    "Gap",
+    "sampling_gaps",
+    "describe_gap",
+]
 
 
 def _next_pow2(n: int) -> int:
@@ -101,3 +115,37 @@ def smooth_sign(x: np.ndarray, threshold: float) -> np.ndarray:
     if threshold <= 0.0:
         return np.sign(x)
     return np.tanh(4.0 * np.asarray(x, dtype=float) / threshold)
+
+
+class Gap(NamedTuple):
+    """A hole in a time axis: ``missing`` samples of step dt lack between the
+    samples at ``start`` and ``end`` (s); ``index`` is the sample before it."""
+
+    index: int
+    start: float
+    end: float
+    missing: int
+
+
+def sampling_gaps(time: np.ndarray, dt: float | None = None, longer_than: int = 0) -> list[Gap]:
+    """The gaps of a strictly increasing time axis with more than
+    ``longer_than`` missing samples of step ``dt`` (default: the median step),
+    in time order. A step of k*dt misses k - 1 samples (rounded)."""
+    t = np.asarray(time, dtype=float)
+    if t.size < 2:
+        return []
+    d = np.diff(t)
+    step = float(np.median(d)) if dt is None else float(dt)
+    if not step > 0.0:
+        return []
+    missing = np.rint(d / step).astype(np.int64) - 1
+    idx = np.nonzero(missing > max(0, int(longer_than)))[0]
+    return [Gap(int(i), float(t[i]), float(t[i + 1]), int(missing[i])) for i in idx]
+
+
+def describe_gap(gap: Gap) -> str:
+    """'0.05 s (49 samples) missing after t = 1.234 s' for messages."""
+    return (
+        f"{gap.end - gap.start:.6g} s ({gap.missing} sample{'s' if gap.missing != 1 else ''}) "
+        f"missing after t = {gap.start:.6g} s"
+    )
