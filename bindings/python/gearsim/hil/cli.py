@@ -9,30 +9,63 @@ measurement CSV (docs/hil.md).
 Hooked into the ``gearsim`` command by gearsim/cli.py through
 :func:`add_subparsers`; :func:`main` runs it standalone
 (``python -m gearsim.hil``). Exit status: 0 success, 2 bad input (one line on
-standard error, no traceback), 1 internal failure. ``--json`` prints exactly
-one JSON object on standard output.
+standard error, no traceback), 1 internal failure (one line; the traceback only
+with GEARSIM_DEBUG set), 130 interrupted, 141 when standard output is a pipe
+closed by its reader (``... -o - | head``; nothing printed). ``--json`` prints
+exactly one JSON object on standard output.
+
+Outputs (``-o``, ``--log``) are checked before any work starts (not an input of
+the command, not a directory, in a writable directory, a log format python-can
+writes) and written atomically: to a temporary file beside the target, renamed
+over it only on success. Messages echo user data through ``printable``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import shutil
+import math
+import os
 import signal
 import sys
 import threading
-import traceback
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
+
+from .._outputs import atomic_write_bytes, check_output, printable
+from ..errors import GearsimError, InputError
 
 __all__ = ["add_subparsers", "build_parser", "main", "run_args"]
 
 _DESCRIPTION = "HIL bridge: a gearsim rig behind a CAN bus (docs/hil.md)"
 
 
-class _InputError(Exception):
+#: Exit status when standard output is a pipe its reader closed (128 + SIGPIPE).
+EXIT_BROKEN_PIPE = 141
+
+
+class _InputError(InputError):
     """Bad input: exit status 2 with one line."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line on standard error and exit 2."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        sys.stderr.write(f"{self.prog}: error: {_one_line(message)}\n")
+        raise SystemExit(2)
+
+
+def _one_line(text: Any) -> str:
+    """Any message as one printable line (whitespace runs folded, control
+    characters escaped, cut when very long)."""
+    return printable(" ".join(str(text).split()), limit=600)
+
+
+def _show(path: Any) -> str:
+    """A path for a success message: escaped, cut only when absurdly long."""
+    return printable(os.fspath(path) if not isinstance(path, str) else path, limit=1000)
 
 
 # -- parser -------------------------------------------------------------------------
@@ -41,7 +74,7 @@ def _model_options(p: argparse.ArgumentParser, model_required: bool = True) -> N
         "--model",
         required=model_required,
         metavar="MODEL.toml",
-        help="model file (docs/measurement-contract.md section 2)",
+        help="model file (docs/measurement-format.md section 2)",
     )
     p.add_argument(
         "--dbc",
@@ -70,6 +103,17 @@ def _model_options(p: argparse.ArgumentParser, model_required: bool = True) -> N
         help="command timeout in seconds before the safe state (default 0.1)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object on standard output")
+
+
+def _gap_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--max-gap",
+        type=float,
+        default=None,
+        metavar="S",
+        help="refuse a log whose time jumps by more than S seconds between two frames "
+        "(mixed absolute and relative timestamps, clock steps; default 60)",
+    )
 
 
 def _fill(parser: argparse.ArgumentParser) -> None:
@@ -144,12 +188,13 @@ def _fill(parser: argparse.ArgumentParser) -> None:
         help="keep running S seconds after the last frame (default 0)",
     )
     p.add_argument("--with-input", action="store_true", help="also write the log's frames to --out")
+    _gap_option(p)
 
     p = sub.add_parser(
         "to-csv",
         help="turn a log of commands and feedback into a measurement CSV",
         description="Convert a log holding a rig's commands and feedback into the "
-        "canonical CSV of docs/measurement-contract.md, resampled on a uniform grid "
+        "canonical CSV of docs/measurement-format.md, resampled on a uniform grid "
         "with hold-last, for gearsim compare|diagnose|fit.",
     )
     p.add_argument("log", metavar="LOG", help="recorded log")
@@ -181,6 +226,14 @@ def _fill(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="add the measured temperature column (out.temperature)",
     )
+    _gap_option(p)
+    p.add_argument(
+        "--max-samples",
+        type=int,
+        default=None,
+        metavar="N",
+        help="refuse a grid of more than N samples (default 5000000)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object on standard output")
 
     p = sub.add_parser(
@@ -194,7 +247,7 @@ def _fill(parser: argparse.ArgumentParser) -> None:
 
 def build_parser(prog: str = "gearsim hil") -> argparse.ArgumentParser:
     """The standalone parser of ``gearsim hil``."""
-    parser = argparse.ArgumentParser(prog=prog, description=_DESCRIPTION)
+    parser = _Parser(prog=prog, description=_DESCRIPTION)
     _fill(parser)
     return parser
 
@@ -220,34 +273,79 @@ def main(argv: list[str] | None = None) -> int:
 
 # -- commands ------------------------------------------------------------------------
 def run_args(args: argparse.Namespace) -> int:
-    """Run the parsed ``hil`` command; returns the exit status (0, 1 or 2)."""
+    """Run the parsed ``hil`` command; returns the exit status (0, 1, 2, 130
+    or 141). Nothing escapes as a traceback unless GEARSIM_DEBUG is set."""
     handlers = {"run": _cmd_run, "replay": _cmd_replay, "to-csv": _cmd_to_csv, "dbc": _cmd_dbc}
+    prog = f"gearsim hil {args.hil_command}"
+    _quiet_python_can()
     try:
-        return handlers[args.hil_command](args)
-    except _InputError as exc:
-        print(f"gearsim hil {args.hil_command}: error: {exc}", file=sys.stderr)
-        return 2
+        status = handlers[args.hil_command](args)
+        sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
+        return status
+    except BrokenPipeError:
+        _silence_stdout()
+        return EXIT_BROKEN_PIPE
     except KeyboardInterrupt:
-        print(f"gearsim hil {args.hil_command}: interrupted", file=sys.stderr)
+        _say(f"{prog}: interrupted")
         return 130
-    except Exception as exc:  # internal failure: say so, keep the traceback for reports
-        from ..errors import GearsimError
-
-        if isinstance(
-            exc, (GearsimError, ValueError, FileNotFoundError, IsADirectoryError, PermissionError)
-        ):
-            print(f"gearsim hil {args.hil_command}: error: {exc}", file=sys.stderr)
-            return 2
-        traceback.print_exc()
-        print(f"gearsim hil {args.hil_command}: internal error: {exc}", file=sys.stderr)
+    except (GearsimError, ValueError, OSError) as exc:
+        # bad input: missing or unreadable files, a log or DBC that does not fit,
+        # options out of range, a bus that does not open, a full disk, ...
+        _say(f"{prog}: error: {_one_line(exc)}")
+        return 2
+    except Exception as exc:  # internal failure: one line, the traceback on request
+        if os.environ.get("GEARSIM_DEBUG"):
+            raise
+        _say(
+            f"{prog}: internal error: {type(exc).__name__}: {_one_line(exc)} "
+            "(set GEARSIM_DEBUG=1 for the traceback)"
+        )
         return 1
+
+
+def _quiet_python_can() -> None:
+    """python-can logs what it meets in a log or on a bus (e.g. "Unknown
+    compression method" in a damaged .blf) through the logging module, which
+    without a configured handler prints each record on stderr: a second line
+    beside the command's own one-line result. The command reports what went
+    wrong itself, so python-can's records are dropped here; GEARSIM_DEBUG
+    keeps them."""
+    if os.environ.get("GEARSIM_DEBUG"):
+        return
+    import logging
+
+    log = logging.getLogger("can")
+    log.addHandler(logging.NullHandler())
+    log.propagate = False
+
+
+def _say(line: str) -> None:
+    try:
+        sys.stderr.write(line + "\n")
+        sys.stderr.flush()
+    except (OSError, ValueError):
+        pass
+
+
+def _silence_stdout() -> None:
+    """Standard output is a pipe its reader closed: point the descriptor at
+    /dev/null so that the interpreter's final flush does not fail again
+    ("Exception ignored ... BrokenPipeError")."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(devnull, sys.stdout.fileno())
+        finally:
+            os.close(devnull)
+    except (OSError, ValueError, AttributeError):
+        pass
 
 
 def _load_model(path: str) -> Any:
     import gearsim
 
     if not Path(path).is_file():
-        raise _InputError(f"{path}: no such model file")
+        raise _InputError(f"{printable(path)}: no such model file")
     return gearsim.Model.load(path)
 
 
@@ -255,7 +353,7 @@ def _dbc_for(args: argparse.Namespace, block: str | None) -> Any:
     from .codec import RigDbc
 
     if args.dbc is not None and not Path(args.dbc).is_file():
-        raise _InputError(f"{args.dbc}: no such DBC file")
+        raise _InputError(f"{printable(args.dbc)}: no such DBC file")
     return RigDbc(args.dbc, block=block)
 
 
@@ -281,8 +379,8 @@ def _counter_lines(summary: dict[str, Any]) -> list[str]:
     lines += [f"{k:<16} {summary[k]}" for k in keys if k in summary]
     for k, v in summary.get("reasons", {}).items():
         lines.append(f"  {k:<22} {v}")
-    for k, v in summary.get("saturated", {}).items():
-        lines.append(f"  saturated {k:<28} {v}")
+    for k, v in summary.get("saturated", {}).items():  # DBC names: user data
+        lines.append(f"  saturated {printable(k):<28} {v}")
     state = summary.get("state", {})
     lines.append("state            " + ", ".join(f"{k}={int(bool(v))}" for k, v in state.items()))
     return lines
@@ -297,6 +395,19 @@ def _check_timing(args: argparse.Namespace) -> None:
         raise _InputError(f"--substeps must be >= 1, got {args.substeps}")
 
 
+def _max_gap(args: argparse.Namespace) -> float:
+    from .replay import DEFAULT_MAX_GAP
+
+    v = DEFAULT_MAX_GAP if args.max_gap is None else args.max_gap
+    if not (math.isfinite(v) and v > 0):
+        raise _InputError(f"--max-gap must be a time > 0 s, got {v!r}")
+    return v
+
+
+def _inputs(args: argparse.Namespace, *names: str) -> list[str | None]:
+    return [getattr(args, n, None) for n in names]
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     import can
 
@@ -307,26 +418,32 @@ def _cmd_run(args: argparse.Namespace) -> int:
         raise _InputError(f"--duration must be >= 0 s, got {args.duration!r}")
     if not args.max_lag > 0:
         raise _InputError(f"--max-lag must be > 0 s, got {args.max_lag!r}")
+    if args.log is not None:
+        from .replay import log_writer_format
+
+        check_output(args.log, _inputs(args, "model", "dbc"), option="--log")
+        log_writer_format(args.log, option="--log")
     model = _load_model(args.model)
     dbc = _dbc_for(args, model.block)
+    where = f"{printable(args.interface)}:{printable(args.channel)}"
     try:
         bus = can.Bus(interface=args.interface, channel=args.channel, bitrate=args.bitrate)
     except (can.CanError, OSError, ValueError, ImportError, NotImplementedError) as exc:
-        raise _InputError(f"cannot open CAN bus {args.interface}:{args.channel}: {exc}") from None
+        raise _InputError(f"cannot open CAN bus {where}: {_one_line(exc)}") from None
     logger = None
     stop = threading.Event()
     previous: dict[int, Any] = {}
+    done = False
 
     def on_signal(signum: int, frame: Any) -> None:
         stop.set()
 
     try:
         listeners = []
-        if args.log:
-            try:
-                logger = can.Logger(args.log)
-            except ValueError as exc:  # unknown suffix
-                raise _InputError(f"{args.log}: {exc}") from None
+        if args.log is not None:
+            from .replay import AtomicLogWriter
+
+            logger = AtomicLogWriter(args.log, option="--log")
             listeners.append(logger.on_message_received)
         bridge = Bridge.from_model(
             model,
@@ -342,9 +459,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
                 previous[sig] = signal.signal(sig, on_signal)
             except ValueError:  # not the main thread
                 pass
-        feedback = ", ".join(f"{f.name}@{f.cycle_time * 1e3:g}ms" for f in dbc.feedback)
+        feedback = ", ".join(
+            f"{printable(f.name)}@{f.cycle_time * 1e3:g}ms" for f in dbc.feedback
+        )
         print(
-            f"gearsim hil run: {model.block} ({args.model}) on {args.interface}:{args.channel}, "
+            f"gearsim hil run: {model.block} ({printable(args.model)}) on {where}, "
             f"period {bridge.period * 1e3:g} ms x {bridge.substeps} substep(s), timeout "
             f"{bridge.timeout * 1e3:g} ms; feedback {feedback}; Ctrl-C stops",
             file=sys.stderr,
@@ -354,12 +473,18 @@ def _cmd_run(args: argparse.Namespace) -> int:
             duration=args.duration, stop=stop, spin=max(0.0, args.spin), max_lag=args.max_lag
         )
         summary = bridge.close()
+        done = True
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
-        if logger is not None:
-            logger.stop()
-        bus.shutdown()
+        try:
+            # the recording replaces --log only when the session ended normally
+            if logger is not None and done:
+                logger.commit()
+            elif logger is not None:
+                logger.abort()
+        finally:
+            bus.shutdown()
     timing = stats.summary()
     summary["loop"] = timing
     lines = _counter_lines(summary)
@@ -378,14 +503,21 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
-    from .replay import replay
+    from .replay import log_writer_format, replay
 
     _check_timing(args)
+    if not (math.isfinite(args.tail) and args.tail >= 0):
+        raise _InputError(f"--tail must be a time >= 0 s, got {args.tail!r}")
+    max_gap = _max_gap(args)
+    if args.out is not None:
+        check_output(args.out, _inputs(args, "log", "model", "dbc"), option="--out")
+        log_writer_format(args.out, option="--out")
     if not Path(args.log).is_file():
-        raise _InputError(f"{args.log}: no such log file")
+        raise _InputError(f"{printable(args.log)}: no such log file")
     model = _load_model(args.model)
     dbc = _dbc_for(args, model.block)
-    # an unknown log suffix is a ValueError: run_args reports it as bad input
+    # the answers go to a temporary file, renamed over --out at the end; a
+    # replay in which no frame drove the model is refused (exit 2, nothing written)
     result = replay(
         model,
         args.log,
@@ -396,6 +528,8 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         timeout=args.timeout,
         tail=args.tail,
         with_input=args.with_input,
+        max_gap=max_gap,
+        require_used=True,
     )
     data = result.as_dict()
     lines = [
@@ -403,7 +537,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         f"{result.wall_time:.3f} s ({result.frames_per_second:.0f} input frames/s)"
     ]
     if args.out:
-        lines.append(f"answers written to {args.out}")
+        lines.append(f"answers written to {_show(args.out)}")
     lines += _counter_lines(result.summary)
     _emit(args, data, lines)
     return 0
@@ -411,10 +545,17 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 
 def _cmd_to_csv(args: argparse.Namespace) -> int:
     from .codec import block_name
-    from .recording import RecordingError, log_to_measurement, write_csv
+    from .recording import DEFAULT_MAX_SAMPLES, log_to_measurement, write_csv
 
+    if args.dt is not None and not (math.isfinite(args.dt) and args.dt > 0):
+        raise _InputError(f"--dt must be a time > 0 s, got {args.dt!r}")
+    max_gap = _max_gap(args)
+    max_samples = DEFAULT_MAX_SAMPLES if args.max_samples is None else args.max_samples
+    if max_samples < 2:
+        raise _InputError(f"--max-samples must be >= 2, got {max_samples}")
+    out = check_output(args.out, _inputs(args, "log", "model", "dbc"), option="--out")
     if not Path(args.log).is_file():
-        raise _InputError(f"{args.log}: no such log file")
+        raise _InputError(f"{printable(args.log)}: no such log file")
     block = None
     if args.rig:
         block = block_name(args.rig)
@@ -423,20 +564,23 @@ def _cmd_to_csv(args: argparse.Namespace) -> int:
     if args.dbc is None and block is None:
         raise _InputError("give --rig, --model or --dbc")
     dbc = _dbc_for(args, block)
-    try:
-        rec = log_to_measurement(
-            args.log, dbc, dt=args.dt, source=args.source, temperature=args.temperature
-        )
-    except RecordingError as exc:
-        raise _InputError(f"{args.log}: {exc}") from None
-    if args.out == "-":
+    rec = log_to_measurement(
+        args.log,
+        dbc,
+        dt=args.dt,
+        source=args.source,
+        temperature=args.temperature,
+        max_gap=max_gap,
+        max_samples=max_samples,
+    )
+    if out == "-":
         write_csv(sys.stdout, rec.columns)
         return 0
-    write_csv(args.out, rec.columns)
+    write_csv(out, rec.columns)  # atomic: a temporary file renamed over --out
     info = rec.info()
-    info["out"] = args.out
-    lines = [f"wrote {rec.rows} rows every {rec.dt:g} s ({', '.join(rec.columns)}) to {args.out}"]
-    lines += [f"  {col:<16} from {src}" for col, src in rec.sources.items()]
+    info["out"] = out
+    lines = [f"wrote {rec.rows} rows every {rec.dt:g} s ({', '.join(rec.columns)}) to {_show(out)}"]
+    lines += [f"  {col:<16} from {printable(src)}" for col, src in rec.sources.items()]
     _emit(args, info, lines)
     return 0
 
@@ -445,11 +589,16 @@ def _cmd_dbc(args: argparse.Namespace) -> int:
     from .codec import shipped_dbc
 
     path = shipped_dbc(args.rig)
-    if args.out:
-        shutil.copyfile(path, args.out)
-        print(args.out)
-    else:
-        print(path)
+    if args.out is None:
+        print(_show(path))
+        return 0
+    out = check_output(args.out, [path], option="--out")
+    data = path.read_bytes()
+    if out == "-":
+        sys.stdout.write(data.decode("utf-8"))
+        return 0
+    atomic_write_bytes(out, data)
+    print(_show(out))
     return 0
 
 

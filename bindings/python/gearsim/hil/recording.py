@@ -1,5 +1,5 @@
 """Recording to measurement: a CAN log of a rig's commands and feedback as the
-canonical CSV of docs/measurement-contract.md section 1, so that
+canonical CSV of docs/measurement-format.md section 1, so that
 ``gearsim compare|diagnose|fit`` can judge a model against a recording.
 
 Columns: ``time, base_speed, load_torque, base_torque, follower_speed`` (gear
@@ -20,11 +20,19 @@ the frames used) starting when every column has had a value and ending at the
 earliest last value; the value at grid time t is the last one received at or
 before t + dt/2 (hold-last; the half step absorbs the jitter between frames of
 the same cycle). ``time`` is seconds since the log's first frame.
+
+Bounds: memory follows the log's real length, never its time span. Time may
+not jump between two consecutive frames by more than ``max_gap`` seconds
+(default 60 s: a log mixing absolute and relative timestamps is refused,
+naming the frame), and the grid may not hold more than ``max_samples`` samples
+(default 5 000 000); both are refused with a :class:`RecordingError` before
+anything is allocated from the time span. :func:`write_csv` writes atomically.
 """
 
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from os import PathLike
@@ -33,10 +41,22 @@ from typing import Any, TextIO
 import can
 import numpy as np
 
+from .._outputs import atomic_writer, printable
+from ..errors import InputError
 from .codec import Rejection, RigDbc
-from .replay import read_log
+from .replay import DEFAULT_MAX_GAP, TimeCheck, read_log
 
-__all__ = ["Recording", "log_to_measurement", "write_csv", "COLUMNS", "RecordingError"]
+__all__ = [
+    "Recording",
+    "log_to_measurement",
+    "write_csv",
+    "COLUMNS",
+    "RecordingError",
+    "DEFAULT_MAX_SAMPLES",
+]
+
+#: Largest number of grid samples log_to_measurement makes by default (``--max-samples``).
+DEFAULT_MAX_SAMPLES = 5_000_000
 
 #: Canonical columns per rig: (speed input, load input, torque output, speed output).
 COLUMNS: dict[str, tuple[str, str, str, str]] = {
@@ -50,9 +70,10 @@ _SOURCES = {
 }
 
 
-class RecordingError(ValueError):
+class RecordingError(InputError):
     """The log cannot be turned into a measurement (no frames of a needed
-    signal, too short, ...)."""
+    signal, too short, too long a grid, ...). A ValueError; bad input: exit
+    status 2."""
 
 
 @dataclass
@@ -92,19 +113,25 @@ def _pick(dbc: RigDbc, which: str, source: str) -> str:
         fb = options["feedback"]
         return fb if dbc.feedback_signals(fb) else options["command"]
     if source not in options:
-        raise RecordingError(f"unknown source {source!r}; expected auto, feedback or command")
+        raise RecordingError(
+            f"unknown source {printable(repr(source))}; expected auto, feedback or command"
+        )
     return options[source]
 
 
 def _describe(dbc: RigDbc, role: str) -> str:
     if role.startswith("cmd."):
         if role not in dbc.command_signals:
-            raise RecordingError(f"{dbc.path}: no command signal with GsRole {role!r}")
+            raise RecordingError(
+                f"{printable(str(dbc.path))}: no command signal with GsRole {role!r}"
+            )
         f, s = dbc.command_signals[role]
         return f"{f.name}.{s.name}"
     found = dbc.feedback_signals(role)
     if not found:
-        raise RecordingError(f"{dbc.path}: no feedback signal with GsRole {role!r}")
+        raise RecordingError(
+            f"{printable(str(dbc.path))}: no feedback signal with GsRole {role!r}"
+        )
     f, s = found[0]
     return f"{f.name}.{s.name}"
 
@@ -116,14 +143,27 @@ def log_to_measurement(
     dt: float | None = None,
     source: str = "auto",
     temperature: bool = False,
+    max_gap: float | None = DEFAULT_MAX_GAP,
+    max_samples: int = DEFAULT_MAX_SAMPLES,
 ) -> Recording:
     """Build the canonical measurement of ``dbc.block`` from a log file (or an
     iterable of messages). See the module docstring for the rules.
 
     Raises RecordingError when a needed signal never appears, the DBC does not
-    say which rig it is for, or fewer than 2 grid points result."""
+    say which rig it is for, fewer than 2 grid points result, or more than
+    ``max_samples``; a LogError (also a ValueError) when the log cannot be
+    read, holds a non-finite timestamp or jumps in time by more than
+    ``max_gap`` seconds (None: no limit) between two consecutive frames."""
+    if isinstance(max_samples, bool) or not isinstance(max_samples, int) or max_samples < 2:
+        raise RecordingError(f"max_samples must be an integer >= 2, got {max_samples!r}")
+    if dt is not None and not (
+        isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0
+    ):
+        raise RecordingError(f"dt must be a time > 0 s, got {dt!r}")
     if dbc.block is None:
-        raise RecordingError(f"{dbc.path} does not name its rig (GsBlock); give the rig")
+        raise RecordingError(
+            f"{printable(str(dbc.path))} does not name its rig (GsBlock); give the rig"
+        )
     speed_role = _pick(dbc, "speed", source)
     load_role = _pick(dbc, "load", source)
     names = COLUMNS[dbc.block]
@@ -136,24 +176,46 @@ def log_to_measurement(
     if temperature:
         roles["temperature"] = "out.temperature"
     sources = {col: _describe(dbc, role) for col, role in roles.items()}
-    wanted = set(roles.values())
 
+    name = "the log"
+    check = TimeCheck(max_gap, name)
     if isinstance(messages, (str, PathLike)):
-        messages = read_log(messages)
+        reader = read_log(messages)
+        check.name = name = reader.name
+        try:
+            return _measure(reader, dbc, roles, sources, check, dt, max_samples, name)
+        finally:
+            reader.stop()
+    return _measure(messages, dbc, roles, sources, check, dt, max_samples, name)
+
+
+def _measure(
+    messages: Iterable[can.Message],
+    dbc: RigDbc,
+    roles: dict[str, str],
+    sources: dict[str, str],
+    check: TimeCheck,
+    dt: float | None,
+    max_samples: int,
+    name: str,
+) -> Recording:
+    assert dbc.block is not None
+    names = COLUMNS[dbc.block]
+    wanted = set(roles.values())
     series: dict[str, tuple[list[float], list[float]]] = {r: ([], []) for r in wanted}
     rec = Recording(dbc.block, {}, 0.0, sources)
     t0: float | None = None
     for msg in messages:
+        t = check(msg.timestamp)
         rec.frames += 1
         if t0 is None:
-            t0 = float(msg.timestamp)
+            t0 = t
         if msg.is_error_frame or msg.is_remote_frame:
             continue
         key = (msg.arbitration_id, bool(msg.is_extended_id))
         frame = dbc.by_key.get(key)
         if frame is None:
             continue
-        t = float(msg.timestamp)
         if frame.kind == "command":
             values = dbc.decode_command(frame, msg.data)
             if isinstance(values, Rejection):
@@ -177,10 +239,10 @@ def log_to_measurement(
                 hit = True
         rec.used += hit
     if t0 is None:
-        raise RecordingError("the log holds no frames")
+        raise RecordingError(f"{name}: the log holds no frames")
     missing = [f"{col} ({sources[col]})" for col, role in roles.items() if not series[role][0]]
     if missing:
-        raise RecordingError("the log has no frames for " + ", ".join(missing))
+        raise RecordingError(f"{name}: no frames for " + ", ".join(missing))
 
     if dt is None:
         cycles = []
@@ -196,7 +258,7 @@ def log_to_measurement(
             ts = np.asarray(series[roles[names[2]]][0])
             dt = float(np.median(np.diff(ts))) if len(ts) > 1 else 0.0
     if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
-        raise RecordingError(f"dt must be a time > 0 s, got {dt!r}")
+        raise RecordingError(f"{name}: cannot infer a grid step (dt = {dt!r}); give --dt")
     dt = float(dt)
 
     arrays: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -208,12 +270,26 @@ def log_to_measurement(
             t_arr, v_arr = t_arr[order], v_arr[order]
             rec.notes.append(f"{role}: frames out of time order, sorted")
         arrays[role] = (t_arr, v_arr)
-    start = max(a[0][0] for a in arrays.values())
-    end = min(a[0][-1] for a in arrays.values())
-    n = int(math.floor((end - start) / dt + 1e-9)) + 1 if end >= start else 0
+    start = float(max(a[0][0] for a in arrays.values()))
+    end = float(min(a[0][-1] for a in arrays.values()))
+    # the sample count is checked as a float before anything is allocated
+    ratio = (end - start) / dt + 1e-9
+    if end < start:
+        samples = 0.0
+    elif math.isfinite(ratio):
+        samples = math.floor(ratio) + 1.0
+    else:
+        samples = math.inf
+    if not samples <= max_samples:
+        raise RecordingError(
+            f"{name}: {end - start:.6g} s of signals at dt = {dt:g} s would make {samples:.6g} "
+            f"samples, more than the limit of {max_samples} (--max-samples); "
+            "raise --dt or --max-samples"
+        )
+    n = int(samples)
     if n < 2:
         raise RecordingError(
-            f"the signals overlap for {max(0.0, end - start):.6g} s only: "
+            f"{name}: the signals overlap for {max(0.0, end - start):.6g} s only: "
             f"fewer than 2 samples at dt = {dt:g} s"
         )
     grid = start + dt * np.arange(n)
@@ -229,11 +305,13 @@ def log_to_measurement(
 
 def write_csv(path: str | PathLike[str] | TextIO, columns: dict[str, np.ndarray]) -> None:
     """Write columns as CSV (to a path or an open text stream): one header
-    row, one row per sample, shortest round-trip float text."""
+    row, one row per sample, shortest round-trip float text. A path is
+    written atomically (a temporary file renamed over it when complete)."""
     if not isinstance(path, (str, PathLike)):
         _write_rows(path, columns)
         return
-    with open(path, "w", encoding="utf-8", newline="") as fh:
+    # a temporary file beside the target, renamed over it once complete
+    with atomic_writer(os.fspath(path), "w", encoding="utf-8", newline="") as fh:
         _write_rows(fh, columns)
 
 
