@@ -6,7 +6,7 @@ Models of EMPS", 2019; data description in ../shared/data/emps/README.md) gives,
 on the load side, the motor-encoder position ``qm`` (m), the drive command
 ``vir`` (V) and the drive gain ``gtau`` (N/V), at 1 kHz. A ball screw turns a
 rotation into a translation like a rack and pinion with an unknown radius, so
-it maps onto gearsim's rack rig (docs/measurement-contract.md section 1):
+it maps onto gearsim's rack rig (docs/measurement-format.md section 1):
 
 =================  ==========================================================
 ``rack_velocity``  d(qm)/dt: qm through a zero-phase 4th-order Butterworth

@@ -1,4 +1,4 @@
-"""Model files (docs/measurement-contract.md section 2): read, write, round trip,
+"""Model files (docs/measurement-format.md section 2): read, write, round trip,
 unit strings, and errors that name the key and the file."""
 
 import math

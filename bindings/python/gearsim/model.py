@@ -1,5 +1,5 @@
 """Model: a block, its parameters and the rig parameters; read from and written
-to the TOML model files of docs/measurement-contract.md section 2.
+to the TOML model files of docs/measurement-format.md section 2.
 
 ```toml
 [rig]

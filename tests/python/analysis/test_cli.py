@@ -1,5 +1,5 @@
 """The `gearsim` command: JSON shapes and exit codes of compare, diagnose, fit
-and report (docs/measurement-contract.md section 4), and bad input: exit 2 with
+and report (docs/measurement-format.md section 4), and bad input: exit 2 with
 one line naming file / line / column / key, no traceback, nothing written."""
 
 from __future__ import annotations

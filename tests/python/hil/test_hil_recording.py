@@ -1,5 +1,5 @@
 """Recording to measurement: a recorded log as the canonical CSV of
-docs/measurement-contract.md section 1."""
+docs/measurement-format.md section 1."""
 
 from __future__ import annotations
 

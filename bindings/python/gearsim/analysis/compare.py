@@ -74,7 +74,7 @@ def compare(
     regimes: bool = True,
 ) -> CompareResult:
     """Simulate model on meas's inputs and measure the error of each output
-    (docs/measurement-contract.md section 4), overall and per regime."""
+    (docs/measurement-format.md section 4), overall and per regime."""
     if inputs is None:
         inputs = prepare_inputs(meas, input_filter)
     sim = simulate(model, meas, inputs)

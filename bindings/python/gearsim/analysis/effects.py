@@ -1,4 +1,4 @@
-"""The effects of docs/measurement-contract.md section 3: what each one sets in
+"""The effects of docs/measurement-format.md section 3: what each one sets in
 a model, which model parameters it fits, their bounds and first guesses, and
 its residual signature (gearsim.analysis.signatures).
 

@@ -3,7 +3,7 @@
 All functions take float arrays of equal length (measured first) and return
 plain floats, in the unit of the output unless said otherwise.
 
-- ``nrmse = rms(measured - simulated) / std(measured)`` (docs/measurement-contract.md
+- ``nrmse = rms(measured - simulated) / std(measured)`` (docs/measurement-format.md
   section 4): 0 is perfect, 1 is as bad as predicting the mean.
 - ``fit_percent = 100 * (1 - ||y - yhat|| / ||y - mean(y)||)``, the NRMSE fit of
   system identification toolboxes; it equals ``100 * (1 - nrmse)``.

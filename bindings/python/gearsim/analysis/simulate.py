@@ -1,7 +1,7 @@
 """Open-loop simulation of a model on a measurement's inputs, through the C rig.
 
 The measured inputs drive the model's rig from the first sample; the outputs
-are never fed back (docs/measurement-contract.md section 4). One batch call of
+are never fed back (docs/measurement-format.md section 4). One batch call of
 ``Rig.run`` per simulation: the loop runs in C.
 
 Input conditioning (documented, offline only): the rig is speed-driven and
