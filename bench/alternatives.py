@@ -535,9 +535,7 @@ def python_loop_full(
             f_last = f
             sum_tau_b += r_b * f + mu_b * w_b  # tau_B = r_B*f + mu_B*omega_B
             # loss: mesh + viscous + contact damping (eq. 5.2)
-            sum_loss += (
-                tau_mesh * w_f + mu_b * w_b * w_b + mu_f * w_f * w_f + (f - f_spring) * u
-            )
+            sum_loss += tau_mesh * w_f + mu_b * w_b * w_b + mu_f * w_f * w_f + (f - f_spring) * u
         # thermal mass (eq. 5.1), Q_H = (T_amb - T)/R_th taken implicitly
         temp = (temp + a_th * (sum_loss / n + g_th * t_amb)) / (1.0 + a_th * g_th)
         out_tau_b[i] = sum_tau_b / n

@@ -224,6 +224,7 @@ def test_model_rig_keeps_the_model():
 
 # -- Rig.step: the C per-step entry point (gspy_rig_step) and its slow path ------
 
+
 def _step_rigs():
     """Speed- and torque-driven rigs of both blocks, with and without temperature input."""
     return [
@@ -359,7 +360,8 @@ def test_substep_cap_warns_with_the_figure():
         rig = gearsim.GearRig(backlash_enabled=True, stiffness=1e9, follower_inertia=1e-4)
     assert rig.substeps == 16
     assert rig.substeps_capped
-    assert rig.contact_h_omega_n == pytest.approx(1e-3 / 16 * (1e9 * 0.2**2 / 1e-4) ** 0.5, rel=1e-9)
+    by_hand = 1e-3 / 16 * (1e9 * 0.2**2 / 1e-4) ** 0.5
+    assert rig.contact_h_omega_n == pytest.approx(by_hand, rel=1e-9)
 
 
 def test_no_substep_warning_when_resolved_or_chosen():

@@ -97,39 +97,51 @@ EXPLORE = bool(os.environ.get("GEARSIM_HYPOTHESIS_EXPLORE"))
 
 COMMON = ["none", "truncate", "byte_flip", "utf16", "latin1", "nul_bytes", "random_binary"]
 COMPRESS = ["gzip", "bz2", "xz"]
-CSV_CLASSES = COMMON + COMPRESS + [
-    "sep_semicolon",
-    "sep_tab",
-    "decimal_comma",
-    "huge_number",
-    "nan",
-    "inf",
-    "empty_field",
-    "dup_column",
-    "reorder_columns",
-    "header_only",
-    "unit_header",
-]
-TOML_CLASSES = COMMON + COMPRESS + [
-    "huge_number",
-    "nan",
-    "inf",
-    "empty_field",
-    "dup_key",
-    "reorder_tables",
-    "unit_string",
-    "unknown_key",
-    "header_only",
-]
-LOG_CLASSES = COMMON + COMPRESS + [
-    "time_jump",
-    "nan",
-    "inf",
-    "empty_field",
-    "reorder_frames",
-    "dup_frames",
-    "no_frames",
-]
+CSV_CLASSES = (
+    COMMON
+    + COMPRESS
+    + [
+        "sep_semicolon",
+        "sep_tab",
+        "decimal_comma",
+        "huge_number",
+        "nan",
+        "inf",
+        "empty_field",
+        "dup_column",
+        "reorder_columns",
+        "header_only",
+        "unit_header",
+    ]
+)
+TOML_CLASSES = (
+    COMMON
+    + COMPRESS
+    + [
+        "huge_number",
+        "nan",
+        "inf",
+        "empty_field",
+        "dup_key",
+        "reorder_tables",
+        "unit_string",
+        "unknown_key",
+        "header_only",
+    ]
+)
+LOG_CLASSES = (
+    COMMON
+    + COMPRESS
+    + [
+        "time_jump",
+        "nan",
+        "inf",
+        "empty_field",
+        "reorder_frames",
+        "dup_frames",
+        "no_frames",
+    ]
+)
 # the log mutations that edit the text of an .asc file
 LOG_TEXT_CLASSES = {"utf16", "latin1", "nan", "inf", "empty_field"}
 
@@ -248,9 +260,7 @@ def _bytes_mutation(draw, cls: str, raw: bytes, text: str) -> bytes | None:
     return None
 
 
-def _compress(
-    draw, cls: str, raw: bytes, name: str, note: list[str]
-) -> tuple[bytes, str]:
+def _compress(draw, cls: str, raw: bytes, name: str, note: list[str]) -> tuple[bytes, str]:
     """Compressed bytes and the file name: with the compressor's extension, or
     under the plain name (recognisable by its magic bytes only)."""
     ext, fn = COMPRESSORS[cls]
@@ -377,7 +387,7 @@ def _mutate_toml(draw, cls: str, base: Base, note: list[str]) -> tuple[bytes, st
     if cls in COMPRESSORS:
         return _compress(draw, cls, text.encode("utf-8"), name, note)
     if cls == "latin1":
-        note = draw(st.sampled_from(["# Prüfstand 3, Öl bei 80 °C", '# µ-Getriebe']))
+        note = draw(st.sampled_from(["# Prüfstand 3, Öl bei 80 °C", "# µ-Getriebe"]))
         return (note + "\n" + text).encode("latin-1"), name
     if cls in ("huge_number", "nan", "inf", "empty_field"):
         table, key = draw(st.sampled_from(_NUMERIC_KEYS))
@@ -432,9 +442,7 @@ def _asc_data_lines(lines: list[str]) -> list[int]:
     return [i for i, ln in enumerate(lines) if " d " in ln and ln.strip()[:1].isdigit()]
 
 
-def _mutate_log(
-    draw, cls: str, base: Base, tmp: Path, note: list[str]
-) -> tuple[bytes, str]:
+def _mutate_log(draw, cls: str, base: Base, tmp: Path, note: list[str]) -> tuple[bytes, str]:
     fmt = "asc" if cls in LOG_TEXT_CLASSES else draw(st.sampled_from(["asc", "blf"]))
     event(f"log format {fmt}")
     note.append(fmt)
@@ -448,9 +456,7 @@ def _mutate_log(
         event(f"log:time_jump {mode} {offset:g} s")
         note.append(f"{mode}, {offset:g} s from frame {k}")
         shifted = (lambda i: i >= k) if mode == "forward" else (lambda i: i < k)
-        msgs = [
-            _restamp(m, m.timestamp + offset) if shifted(i) else m for i, m in enumerate(msgs)
-        ]
+        msgs = [_restamp(m, m.timestamp + offset) if shifted(i) else m for i, m in enumerate(msgs)]
     elif cls == "reorder_frames":
         i = draw(st.integers(0, len(msgs) - 2))
         j = draw(st.integers(i + 1, len(msgs) - 1))

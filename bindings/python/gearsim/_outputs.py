@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import os
 import stat
+import sys
 import tempfile
 from collections.abc import Iterable, Iterator
 from typing import IO, Any
@@ -34,6 +35,8 @@ __all__ = [
     "atomic_write_bytes",
     "printable",
     "same_file",
+    "say",
+    "stdout_to_devnull",
 ]
 
 
@@ -141,7 +144,9 @@ def _file_mode(target: str) -> int:
 
 
 @contextlib.contextmanager
-def atomic_writer(path: str | os.PathLike[str], mode: str = "w", **open_kwargs: Any) -> Iterator[IO[Any]]:
+def atomic_writer(
+    path: str | os.PathLike[str], mode: str = "w", **open_kwargs: Any
+) -> Iterator[IO[Any]]:
     """A file object writing to a temporary file beside ``path``; renamed over
     ``path`` when the block ends without an exception, removed otherwise."""
     target = os.fspath(path)
@@ -168,3 +173,33 @@ def atomic_write_text(path: str | os.PathLike[str], text: str, encoding: str = "
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
     with atomic_writer(path, "wb") as fh:
         fh.write(data)
+
+
+def say(line: str) -> None:
+    """One line on stderr (a command's error or note); a closed stderr is not
+    an error of its own."""
+    try:
+        sys.stderr.write(line + "\n")
+        sys.stderr.flush()
+    except (OSError, ValueError):
+        pass
+
+
+def stdout_to_devnull() -> None:
+    """Standard output is a pipe whose reader left: point its descriptor at
+    /dev/null, so that the flush at interpreter shutdown does not print
+    'Exception ignored ... BrokenPipeError'."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        return  # not a real file (captured in a test): nothing is flushed at exit
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+    except OSError:
+        return
+    try:
+        os.dup2(devnull, fd)
+    except OSError:
+        pass
+    finally:
+        os.close(devnull)

@@ -42,6 +42,8 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 
+from ._outputs import say, stdout_to_devnull
+
 __all__ = [
     "main",
     "add_command",
@@ -82,15 +84,6 @@ def _one_line(text: object) -> str:
     return printable(" ".join(str(text).split()), limit=MESSAGE_LIMIT)
 
 
-def _err(line: str) -> None:
-    """One line on stderr; a closed stderr is not an error of its own."""
-    try:
-        sys.stderr.write(line + "\n")
-        sys.stderr.flush()
-    except (OSError, ValueError):
-        pass
-
-
 class _Parser(argparse.ArgumentParser):
     """argparse, but a usage error is one printable line on stderr and exit 2;
     the top-level help starts with START_HERE."""
@@ -98,7 +91,7 @@ class _Parser(argparse.ArgumentParser):
     start_here: str | None = None
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        _err(f"{self.prog}: error: {_one_line(message)}")
+        say(f"{self.prog}: error: {_one_line(message)}")
         raise SystemExit(EXIT_BAD_INPUT)
 
     def _print_message(self, message: str, file=None) -> None:  # type: ignore[override]
@@ -194,7 +187,7 @@ def _exit_code(code: object) -> int:
         return EXIT_OK
     if isinstance(code, int):
         return code
-    _err(_one_line(code))
+    say(_one_line(code))
     return EXIT_INTERNAL
 
 
@@ -216,35 +209,21 @@ def _run(argv: Sequence[str] | None) -> int:
     except BrokenPipeError:
         raise  # main() ends quietly
     except _bad_input_types() as exc:
-        _err(f"{_one_line(prog)}: error: {_one_line(exc)}")
+        say(f"{_one_line(prog)}: error: {_one_line(exc)}")
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         if os.environ.get("GEARSIM_DEBUG"):
             raise
-        _err(f"{_one_line(prog)}: interrupted")
+        say(f"{_one_line(prog)}: interrupted")
         return EXIT_INTERRUPTED
     except Exception as exc:  # internal failure: one line, traceback only on request
         if os.environ.get("GEARSIM_DEBUG"):
             raise
-        _err(
+        say(
             f"{_one_line(prog)}: internal error: {type(exc).__name__}: {_one_line(exc)} "
             f"(set GEARSIM_DEBUG=1 for the traceback)"
         )
         return EXIT_INTERNAL
-
-
-def _stdout_to_devnull() -> None:
-    """Point the stdout file descriptor at /dev/null, so that the flush at
-    interpreter shutdown does not print 'Exception ignored ... BrokenPipeError'."""
-    try:
-        fd = sys.stdout.fileno()
-    except (AttributeError, OSError, ValueError):
-        return  # not a real file (captured in a test): nothing is flushed at exit
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    try:
-        os.dup2(devnull, fd)
-    finally:
-        os.close(devnull)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -254,7 +233,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         status = _run(argv)
         sys.stdout.flush()  # a reader that left shows here, not at shutdown
     except BrokenPipeError:
-        _stdout_to_devnull()
+        stdout_to_devnull()
         return EXIT_BROKEN_PIPE
     return status
 

@@ -21,6 +21,8 @@ still under-resolved (h*omega_n > 0.5).
 
 from __future__ import annotations
 
+import os
+import sys
 from os import PathLike
 from typing import Any
 
@@ -30,6 +32,7 @@ __all__ = [
     "ModelFileError",
     "InputError",
     "SubstepWarning",
+    "caller_stacklevel",
 ]
 
 
@@ -114,3 +117,18 @@ class SubstepWarning(UserWarning):
     (16) with h*omega_n still above 0.5: the contact is stable (backward Euler)
     but numerically over-damped, so rebounds come out too soft. Lower ``dt``, or
     set ``contact_substeps`` (up to 64), or soften the contact."""
+
+
+_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))
+
+
+def caller_stacklevel() -> int:
+    """warnings.warn's stacklevel of the first frame outside the gearsim
+    package, so that a warning points at the user's line however deep in
+    gearsim it was raised."""
+    frame = sys._getframe(1)
+    level = 1
+    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
+        frame = frame.f_back
+        level += 1
+    return level

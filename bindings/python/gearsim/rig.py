@@ -9,9 +9,7 @@ arrays (gs_rig_run) and is bit-identical to the same number of steps.
 from __future__ import annotations
 
 import math
-import os
 import struct
-import sys
 import warnings
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
@@ -22,20 +20,7 @@ import numpy as np
 from . import params as P
 from ._lib import INPUT_COLUMNS, OUTPUT_COLUMNS, check, ffi, lib
 from .blocks import Block, RackPinion, SimpleGear
-from .errors import GearsimError, InputError, ParameterError, SubstepWarning
-
-_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))
-
-
-def _caller_stacklevel() -> int:
-    """warnings.warn's stacklevel of the first frame outside the package, so a
-    warning points at the user's line however deep in gearsim it was raised."""
-    frame = sys._getframe(1)
-    level = 1
-    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
-        frame = frame.f_back
-        level += 1
-    return level
+from .errors import GearsimError, InputError, ParameterError, SubstepWarning, caller_stacklevel
 
 __all__ = ["Rig", "GearRig", "RackRig", "RigResult", "RigSnapshot", "INPUT_NAMES", "OUTPUT_NAMES"]
 
@@ -253,7 +238,7 @@ class Rig:
                 f"(dt = {dt_value!r} s): the contact is stable but over-damped; lower dt "
                 f"or set contact_substeps (up to {int(lib.GS_MAX_SUBSTEPS)})",
                 SubstepWarning,
-                stacklevel=_caller_stacklevel(),
+                stacklevel=caller_stacklevel(),
             )
         ambient = full["ambient_temperature"]
         if not (math.isfinite(ambient) and ambient > 0):

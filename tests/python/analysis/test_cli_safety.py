@@ -92,7 +92,14 @@ def test_fit_out_naming_an_input_is_refused(capsys, tmp_path, demo, which):
     refused(
         capsys,
         tmp_path,
-        "fit", data, "--model", model, "--add", "viscous_friction", "--out", target,
+        "fit",
+        data,
+        "--model",
+        model,
+        "--add",
+        "viscous_friction",
+        "--out",
+        target,
         needles=("--out", target.name, "input"),
     )
 
@@ -104,7 +111,14 @@ def test_fit_out_naming_an_input_through_another_path_is_refused(capsys, tmp_pat
     refused(
         capsys,
         tmp_path,
-        "fit", data, "--model", model, "--add", "viscous_friction", "--out", other,
+        "fit",
+        data,
+        "--model",
+        model,
+        "--add",
+        "viscous_friction",
+        "--out",
+        other,
         needles=("--out", "input"),
     )
 
@@ -116,7 +130,12 @@ def test_report_out_naming_an_input_is_refused(capsys, tmp_path, demo, which):
     refused(
         capsys,
         tmp_path,
-        "report", data, "--model", model, "--out", target,
+        "report",
+        data,
+        "--model",
+        model,
+        "--out",
+        target,
         needles=("--out", target.name, "input"),
     )
 
@@ -130,7 +149,12 @@ def test_report_out_dir_holding_an_input_under_a_report_name_is_refused(capsys, 
     refused(
         capsys,
         tmp_path,
-        "report", inside, "--model", model, "--out", rep,
+        "report",
+        inside,
+        "--model",
+        model,
+        "--out",
+        rep,
         needles=("--out", "report.html", "input"),
     )
 
@@ -140,7 +164,14 @@ def test_fit_out_empty_is_refused(capsys, tmp_path, demo):
     refused(
         capsys,
         tmp_path,
-        "fit", data, "--model", model, "--add", "viscous_friction", "--out", "",
+        "fit",
+        data,
+        "--model",
+        model,
+        "--add",
+        "viscous_friction",
+        "--out",
+        "",
         needles=("--out", "empty"),
     )
 
@@ -156,7 +187,14 @@ def test_fit_out_directory_is_refused(capsys, tmp_path, demo):
     refused(
         capsys,
         tmp_path,
-        "fit", data, "--model", model, "--add", "viscous_friction", "--out", tmp_path / "models",
+        "fit",
+        data,
+        "--model",
+        model,
+        "--add",
+        "viscous_friction",
+        "--out",
+        tmp_path / "models",
         needles=("--out", "models", "directory"),
     )
 
@@ -168,7 +206,13 @@ def test_out_dash_is_refused(capsys, tmp_path, demo, command):
     refused(
         capsys,
         tmp_path,
-        command, data, "--model", model, *extra, "--out", "-",
+        command,
+        data,
+        "--model",
+        model,
+        *extra,
+        "--out",
+        "-",
         needles=("--out -", "standard output"),
     )
 
@@ -182,7 +226,13 @@ def test_out_in_a_missing_directory_fails_before_any_work(capsys, tmp_path, demo
     refused(
         capsys,
         tmp_path,
-        command, data, "--model", model, *extra, "--out", out,
+        command,
+        data,
+        "--model",
+        model,
+        *extra,
+        "--out",
+        out,
         needles=("--out", "nowhere", "does not exist"),
     )
 
@@ -207,7 +257,13 @@ def test_out_in_an_unwritable_directory_fails_before_any_work(capsys, tmp_path, 
     refused(
         capsys,
         tmp_path,
-        command, data, "--model", model, *extra, "--out", out,
+        command,
+        data,
+        "--model",
+        model,
+        *extra,
+        "--out",
+        out,
         needles=("--out", "/proc", "cannot write"),
     )
 
@@ -225,7 +281,15 @@ def test_fit_out_is_written_atomically_with_ordinary_permissions(capsys, tmp_pat
     assert (new.stat().st_mode & 0o777) == 0o640  # the replaced file's permissions kept
     fresh = tmp_path / "fresh.toml"
     status, _, err = gearsim(
-        capsys, "fit", data, "--model", model, "--add", "viscous_friction", "--out", fresh,
+        capsys,
+        "fit",
+        data,
+        "--model",
+        model,
+        "--add",
+        "viscous_friction",
+        "--out",
+        fresh,
         "--quiet",
     )
     assert status == 0, err
@@ -270,7 +334,12 @@ def test_report_out_existing_file_is_refused(capsys, tmp_path, demo):
     refused(
         capsys,
         tmp_path,
-        "report", data, "--model", model, "--out", existing,
+        "report",
+        data,
+        "--model",
+        model,
+        "--out",
+        existing,
         needles=("--out", "notes.txt", "not a directory"),
     )
 
@@ -321,17 +390,36 @@ def test_internal_error_is_one_line_and_the_traceback_needs_gearsim_debug(
     "argv, needles",
     [
         (["fit", "{data}", "--model", "{model}"], ["--add"]),
-        (["report", "{data}", "--model", "{model}", "--out", "{tmp}/r", "--rounds", "-1"],
-         ["--rounds", "-1"]),
-        (["report", "{data}", "--model", "{model}", "--out", "{tmp}/r", "--rounds", "1.5"],
-         ["--rounds", "1.5"]),
-        (["report", "{data}", "--model", "{model}", "--out", "{tmp}/r", "--rounds", "x"],
-         ["--rounds"]),
+        (
+            ["report", "{data}", "--model", "{model}", "--out", "{tmp}/r", "--rounds", "-1"],
+            ["--rounds", "-1"],
+        ),
+        (
+            ["report", "{data}", "--model", "{model}", "--out", "{tmp}/r", "--rounds", "1.5"],
+            ["--rounds", "1.5"],
+        ),
+        (
+            ["report", "{data}", "--model", "{model}", "--out", "{tmp}/r", "--rounds", "x"],
+            ["--rounds"],
+        ),
         (["diagnose", "{data}", "--model", "{model}", "--top", "0"], ["--top"]),
-        (["fit", "{data}", "--model", "{model}", "--add", "viscous_friction", "--max-samples",
-          "-5"], ["--max-samples"]),
-        (["compare", "{data}", "--model", "{model}", "--resample", "--max-gap", "-1"],
-         ["--max-gap"]),
+        (
+            [
+                "fit",
+                "{data}",
+                "--model",
+                "{model}",
+                "--add",
+                "viscous_friction",
+                "--max-samples",
+                "-5",
+            ],
+            ["--max-samples"],
+        ),
+        (
+            ["compare", "{data}", "--model", "{model}", "--resample", "--max-gap", "-1"],
+            ["--max-gap"],
+        ),
         (["compare", "{data}", "--model", "{model}", "--no-such-option"], ["--no-such-option"]),
         (["frobnicate"], ["frobnicate"]),
         (["compare", "{data}", "--model", "{model}", "--bad\x1b[2J"], ["\\x1b"]),
@@ -351,7 +439,11 @@ def _closed_pipe_run(*argv: str, cwd: Path) -> subprocess.CompletedProcess:
     env = {k: v for k, v in os.environ.items() if k != "GEARSIM_DEBUG"}
     try:
         return subprocess.run(
-            [str(GEARSIM), *argv], stdout=w, stderr=subprocess.PIPE, cwd=cwd, env=env,
+            [str(GEARSIM), *argv],
+            stdout=w,
+            stderr=subprocess.PIPE,
+            cwd=cwd,
+            env=env,
             timeout=120,
         )
     finally:
@@ -376,9 +468,17 @@ def test_closed_stdout_ends_quietly_with_the_sigpipe_status(tmp_path, demo, argv
 def test_head_c_1_pipeline_is_quiet(tmp_path, demo):
     env = {k: v for k, v in os.environ.items() if k != "GEARSIM_DEBUG"}
     p = subprocess.run(
-        ["bash", "-o", "pipefail", "-c",
-         f"'{GEARSIM}' compare data.csv --model model.toml --json | head -c 1"],
-        capture_output=True, cwd=tmp_path, env=env, timeout=120,
+        [
+            "bash",
+            "-o",
+            "pipefail",
+            "-c",
+            f"'{GEARSIM}' compare data.csv --model model.toml --json | head -c 1",
+        ],
+        capture_output=True,
+        cwd=tmp_path,
+        env=env,
+        timeout=120,
     )
     # the reader may have left before or after the last write: 141 or 0, never noise
     assert p.returncode in (0, 141), p.stderr
@@ -411,7 +511,12 @@ def test_control_characters_in_option_values_are_escaped(capsys, tmp_path, demo)
     line = refused(
         capsys,
         tmp_path,
-        "compare", data, "--model", model, "--input-filter", "12\x1b[2J",
+        "compare",
+        data,
+        "--model",
+        model,
+        "--input-filter",
+        "12\x1b[2J",
         needles=("--input-filter", "\\x1b"),
     )
     assert "\x1b" not in line
@@ -434,7 +539,12 @@ def test_input_filter_at_or_above_nyquist_is_refused(capsys, tmp_path, demo, hz)
     refused(
         capsys,
         tmp_path,
-        "compare", data, "--model", model, "--input-filter", hz,
+        "compare",
+        data,
+        "--model",
+        model,
+        "--input-filter",
+        hz,
         needles=("--input-filter", hz, "Nyquist", "500 Hz"),
     )
 
@@ -444,8 +554,16 @@ def test_input_filter_at_nyquist_is_refused_before_a_fit_writes(capsys, tmp_path
     refused(
         capsys,
         tmp_path,
-        "fit", data, "--model", model, "--add", "viscous_friction", "--input-filter", "500",
-        "--out", tmp_path / "new.toml",
+        "fit",
+        data,
+        "--model",
+        model,
+        "--add",
+        "viscous_friction",
+        "--input-filter",
+        "500",
+        "--out",
+        tmp_path / "new.toml",
         needles=("Nyquist",),
     )
 
@@ -470,7 +588,15 @@ def test_resample_says_what_it_filled_even_with_quiet(capsys, tmp_path, demo):
     data, model = demo
     gap = _with_gap(data, tmp_path / "gap.csv", 1000, 3)
     status, out, err = gearsim(
-        capsys, "compare", gap, "--model", model, "--resample", "--max-gap", "0", "--quiet",
+        capsys,
+        "compare",
+        gap,
+        "--model",
+        model,
+        "--resample",
+        "--max-gap",
+        "0",
+        "--quiet",
         "--json",
     )
     assert status == 0, err
@@ -484,7 +610,15 @@ def test_a_refusal_after_a_loader_note_is_still_one_line(capsys, tmp_path, demo)
     refused(
         capsys,
         tmp_path,
-        "compare", gap, "--model", model, "--resample", "--max-gap", "0", "--input-filter", "500",
+        "compare",
+        gap,
+        "--model",
+        model,
+        "--resample",
+        "--max-gap",
+        "0",
+        "--input-filter",
+        "500",
         needles=("Nyquist",),
     )
 
@@ -495,7 +629,13 @@ def test_resample_refuses_a_long_gap(capsys, tmp_path, demo):
     refused(
         capsys,
         tmp_path,
-        "compare", gap, "--model", model, "--resample", "--max-gap", "10",
+        "compare",
+        gap,
+        "--model",
+        model,
+        "--resample",
+        "--max-gap",
+        "10",
         needles=("gap.csv", "0.999"),
     )
 

@@ -180,9 +180,7 @@ def test_bad_output_paths_are_refused_before_any_work(
 ) -> None:
     before = _snapshot(work["dir"])
     rig = ["--rig", "gear"] if command == "to-csv" else ["--model", work["model"]]
-    rc, _, err = _run(
-        capsys, "hil", command, work["log"], *rig, "-o", out.format(dir=work["dir"])
-    )
+    rc, _, err = _run(capsys, "hil", command, work["log"], *rig, "-o", out.format(dir=work["dir"]))
     assert rc == 2
     _one_error_line(err, message)
     assert _snapshot(work["dir"]) == before
@@ -269,7 +267,15 @@ def test_usage_errors_are_one_line_also_standalone(capsys: pytest.CaptureFixture
 def test_broken_pipe_ends_quietly(work: dict[str, Path]) -> None:
     # about 2 MB of CSV: far more than a pipe holds, so the writer meets the closed pipe
     proc = _gearsim(
-        "hil", "to-csv", work["log"], "--rig", "gear", "--dt", "1e-5", "-o", "-",
+        "hil",
+        "to-csv",
+        work["log"],
+        "--rig",
+        "gear",
+        "--dt",
+        "1e-5",
+        "-o",
+        "-",
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
     )
@@ -367,15 +373,32 @@ def test_a_long_pause_needs_max_gap_and_replays_in_bounded_chunks(
 
     monkeypatch.setattr(bridge_mod.Bridge, "advance", spy)
     rc, out, err = _run(
-        capsys, "hil", "replay", log, "--model", work["model"], "--max-gap", "100",
-        "--substeps", "4", "--json",
+        capsys,
+        "hil",
+        "replay",
+        log,
+        "--model",
+        work["model"],
+        "--max-gap",
+        "100",
+        "--substeps",
+        "4",
+        "--json",
     )
     assert rc == 0, err
     # 70 s at 1 ms x 4 sub-steps is 280 000 rig steps: never asked of the rig at once
     assert sum(calls) >= 70_000 and max(calls) * 4 <= CHUNK_STEPS
     # to-csv holds the last values across the pause, within the sample limit
     rc, out, err = _run(
-        capsys, "hil", "to-csv", log, "--rig", "gear", "--max-gap", "100", "-o",
+        capsys,
+        "hil",
+        "to-csv",
+        log,
+        "--rig",
+        "gear",
+        "--max-gap",
+        "100",
+        "-o",
         work["dir"] / "p.csv",
     )
     assert rc == 0, err
@@ -483,8 +506,7 @@ def test_replay_writes_compressed_answers(
 
     def frames(p: Path) -> list[tuple[float, int, bytes]]:
         return [
-            (round(m.timestamp, 6), m.arbitration_id, bytes(m.data))
-            for m in can.LogReader(str(p))
+            (round(m.timestamp, 6), m.arbitration_id, bytes(m.data)) for m in can.LogReader(str(p))
         ]
 
     assert frames(packed) == frames(plain) and len(frames(plain)) == 69

@@ -55,9 +55,7 @@ def _count(minimum: int):
                 f"must be a whole number >= {minimum}, got '{printable(text)}'"
             ) from None
         if value < minimum:
-            raise argparse.ArgumentTypeError(
-                f"must be a whole number >= {minimum}, got {value}"
-            )
+            raise argparse.ArgumentTypeError(f"must be a whole number >= {minimum}, got {value}")
         return value
 
     parse.__name__ = f"whole number >= {minimum}"
@@ -65,9 +63,7 @@ def _count(minimum: int):
 
 
 def _common(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "data", metavar="DATA.csv", help=f"measurement CSV (columns: {FORMAT_DOC})"
-    )
+    p.add_argument("data", metavar="DATA.csv", help=f"measurement CSV (columns: {FORMAT_DOC})")
     p.add_argument(
         "--model", required=True, metavar="MODEL.toml", help=f"model file ({FORMAT_DOC})"
     )
@@ -167,7 +163,8 @@ def _check_magnitudes(model: Any, path: str) -> None:
             values = value if isinstance(value, (list, tuple)) else [value]
             flat = [v for row in values for v in (row if isinstance(row, (list, tuple)) else [row])]
             for v in flat:
-                if isinstance(v, (int, float)) and not isinstance(v, bool) and abs(v) > MAX_MAGNITUDE:
+                number = isinstance(v, (int, float)) and not isinstance(v, bool)
+                if number and abs(v) > MAX_MAGNITUDE:
                     raise ModelFileError(
                         f"{key} = {v:g} ([{section}]) is beyond the supported magnitude "
                         f"{MAX_MAGNITUDE:g} (SI units)",

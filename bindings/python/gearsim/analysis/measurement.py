@@ -60,6 +60,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .._outputs import printable
+from ..errors import caller_stacklevel
 from .errors import MeasurementError
 from .signals import describe_gap, sampling_gaps
 
@@ -531,20 +532,9 @@ class _Notes:
         if self.note is not None:
             self.note(f"{self.shown}: warning: {msg}")
         else:
-            warnings.warn(f"{self.shown}: {msg}", MeasurementWarning, stacklevel=_stacklevel())
-
-
-_PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-
-def _stacklevel() -> int:
-    """warnings.warn's stacklevel of the first frame outside gearsim."""
-    frame = sys._getframe(1)
-    level = 1
-    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
-        frame = frame.f_back
-        level += 1
-    return level
+            warnings.warn(
+                f"{self.shown}: {msg}", MeasurementWarning, stacklevel=caller_stacklevel()
+            )
 
 
 # ------------------------------------------------------------------ header and dialect

@@ -33,7 +33,7 @@ from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
-from .._outputs import atomic_write_bytes, check_output, printable
+from .._outputs import atomic_write_bytes, check_output, printable, say, stdout_to_devnull
 from ..errors import GearsimError, InputError
 
 __all__ = ["add_subparsers", "build_parser", "main", "run_args"]
@@ -283,20 +283,20 @@ def run_args(args: argparse.Namespace) -> int:
         sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
         return status
     except BrokenPipeError:
-        _silence_stdout()
+        stdout_to_devnull()
         return EXIT_BROKEN_PIPE
     except KeyboardInterrupt:
-        _say(f"{prog}: interrupted")
+        say(f"{prog}: interrupted")
         return 130
     except (GearsimError, ValueError, OSError) as exc:
         # bad input: missing or unreadable files, a log or DBC that does not fit,
         # options out of range, a bus that does not open, a full disk, ...
-        _say(f"{prog}: error: {_one_line(exc)}")
+        say(f"{prog}: error: {_one_line(exc)}")
         return 2
     except Exception as exc:  # internal failure: one line, the traceback on request
         if os.environ.get("GEARSIM_DEBUG"):
             raise
-        _say(
+        say(
             f"{prog}: internal error: {type(exc).__name__}: {_one_line(exc)} "
             "(set GEARSIM_DEBUG=1 for the traceback)"
         )
@@ -317,28 +317,6 @@ def _quiet_python_can() -> None:
     log = logging.getLogger("can")
     log.addHandler(logging.NullHandler())
     log.propagate = False
-
-
-def _say(line: str) -> None:
-    try:
-        sys.stderr.write(line + "\n")
-        sys.stderr.flush()
-    except (OSError, ValueError):
-        pass
-
-
-def _silence_stdout() -> None:
-    """Standard output is a pipe its reader closed: point the descriptor at
-    /dev/null so that the interpreter's final flush does not fail again
-    ("Exception ignored ... BrokenPipeError")."""
-    try:
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        try:
-            os.dup2(devnull, sys.stdout.fileno())
-        finally:
-            os.close(devnull)
-    except (OSError, ValueError, AttributeError):
-        pass
 
 
 def _load_model(path: str) -> Any:
@@ -459,9 +437,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
                 previous[sig] = signal.signal(sig, on_signal)
             except ValueError:  # not the main thread
                 pass
-        feedback = ", ".join(
-            f"{printable(f.name)}@{f.cycle_time * 1e3:g}ms" for f in dbc.feedback
-        )
+        feedback = ", ".join(f"{printable(f.name)}@{f.cycle_time * 1e3:g}ms" for f in dbc.feedback)
         print(
             f"gearsim hil run: {model.block} ({printable(args.model)}) on {where}, "
             f"period {bridge.period * 1e3:g} ms x {bridge.substeps} substep(s), timeout "

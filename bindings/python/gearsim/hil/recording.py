@@ -129,9 +129,7 @@ def _describe(dbc: RigDbc, role: str) -> str:
         return f"{f.name}.{s.name}"
     found = dbc.feedback_signals(role)
     if not found:
-        raise RecordingError(
-            f"{printable(str(dbc.path))}: no feedback signal with GsRole {role!r}"
-        )
+        raise RecordingError(f"{printable(str(dbc.path))}: no feedback signal with GsRole {role!r}")
     f, s = found[0]
     return f"{f.name}.{s.name}"
 
@@ -156,9 +154,7 @@ def log_to_measurement(
     ``max_gap`` seconds (None: no limit) between two consecutive frames."""
     if isinstance(max_samples, bool) or not isinstance(max_samples, int) or max_samples < 2:
         raise RecordingError(f"max_samples must be an integer >= 2, got {max_samples!r}")
-    if dt is not None and not (
-        isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0
-    ):
+    if dt is not None and not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
         raise RecordingError(f"dt must be a time > 0 s, got {dt!r}")
     if dbc.block is None:
         raise RecordingError(
