@@ -272,17 +272,23 @@ static gs_real smooth_root(const gs_mesh_ *m, const closing_ *q, gs_real v_guess
     return smooth_transition_root(m, q, gs_max(v_edge, v_kink), gs_min(v_full, q->v_free), v_guess);
 }
 
-/* Spring part of the force at penetration delta > 0 (side-normalised). */
-static gs_real spring_force(const gs_mesh_ *m, gs_real delta)
+/* The smooth law's ramp S(delta/d) inside the transition region, 1 beyond
+ * it and for the full laws (side-normalised penetration delta > 0). */
+static gs_real transition_scale(const gs_mesh_ *m, gs_real delta)
 {
-    gs_real f = m->stiffness * delta;
     if (m->hard_stop == GS_HARD_STOP_SMOOTH) {
         const gs_real xi = delta * m->inv_transition;
         if (xi < GS_R(1.0)) {
-            f *= smooth_step(xi);
+            return smooth_step(xi);
         }
     }
-    return f;
+    return GS_R(1.0);
+}
+
+/* Spring part of the force at penetration delta > 0 (side-normalised). */
+static gs_real spring_force(const gs_mesh_ *m, gs_real delta)
+{
+    return m->stiffness * delta * transition_scale(m, delta);
 }
 
 /* The clipped contact law at penetration delta > 0 and closing speed v,
@@ -293,14 +299,7 @@ static gs_real law_force(const gs_mesh_ *m, gs_real delta, gs_real v)
     if (m->hard_stop == GS_HARD_STOP_FULL_UNDAMPED && v < GS_R(0.0)) {
         damping = GS_R(0.0);
     }
-    gs_real f = gs_max(GS_R(0.0), m->stiffness * delta + damping * v);
-    if (m->hard_stop == GS_HARD_STOP_SMOOTH) {
-        const gs_real xi = delta * m->inv_transition;
-        if (xi < GS_R(1.0)) {
-            f *= smooth_step(xi);
-        }
-    }
-    return f;
+    return gs_max(GS_R(0.0), m->stiffness * delta + damping * v) * transition_scale(m, delta);
 }
 
 static gs_real solve_no_pull(const gs_mesh_ *m, const gs_contact_step_ *cs, gs_real x, gs_real u_free,

@@ -40,16 +40,24 @@ void gs_mesh_loss_prepare(const gs_mesh_ *m, gs_real temperature, gs_loss_ctx_ *
     ctx->loss_backward = GS_R(1.0) / eta - GS_R(1.0);
 }
 
-/* Loss factor c with tau_mesh = T*c of the power-smoothed efficiency laws. */
-static gs_real efficiency_loss_factor(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T,
-                                      gs_real w)
+/* Loss factor c with tau_mesh = T*c of the power-smoothed efficiency laws
+ * (2.1/2.2): loss_pos where the power T*w is positive, loss_neg where it is
+ * negative, blended by t = tanh(4*T*w/p_th). */
+static gs_real power_smoothed_factor(const gs_mesh_ *m, gs_real T, gs_real w, gs_real loss_pos,
+                                     gs_real loss_neg)
 {
     const gs_real t = gs_tanh(GS_R(4.0) * T * w * m->inv_power_threshold);
     if (m->smoothing == GS_SMOOTHING_SIMSCAPE) {
-        return GS_R(0.5) * ((ctx->loss_forward + ctx->loss_backward) * t + ctx->loss_forward
-                            - ctx->loss_backward);
+        return GS_R(0.5) * ((loss_pos + loss_neg) * t + loss_pos - loss_neg);
     }
-    return t * (t >= GS_R(0.0) ? ctx->loss_forward : ctx->loss_backward);
+    return t * (t >= GS_R(0.0) ? loss_pos : loss_neg);
+}
+
+/* On the follower torque T_F (rigid mesh): L_fd when the follower drives. */
+static gs_real efficiency_loss_factor(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T,
+                                      gs_real w)
+{
+    return power_smoothed_factor(m, T, w, ctx->loss_forward, ctx->loss_backward);
 }
 
 /* Coulomb-type laws (2.6, 2.7): magnitude C0 + slope*|T|, smoothed on speed. */
@@ -86,12 +94,7 @@ gs_real gs_mesh_loss_torque(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real 
  * two loss factors swap. The power-flow sign of T_F0*w is that of T_F*w. */
 static gs_real tooth_loss_factor(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real t_f0, gs_real w)
 {
-    const gs_real t = gs_tanh(GS_R(4.0) * t_f0 * w * m->inv_power_threshold);
-    if (m->smoothing == GS_SMOOTHING_SIMSCAPE) {
-        return GS_R(0.5) * ((ctx->loss_backward + ctx->loss_forward) * t + ctx->loss_backward
-                            - ctx->loss_forward);
-    }
-    return t * (t >= GS_R(0.0) ? ctx->loss_backward : ctx->loss_forward);
+    return power_smoothed_factor(m, t_f0, w, ctx->loss_backward, ctx->loss_forward);
 }
 
 gs_real gs_mesh_loss_from_tooth(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real t_f0, gs_real w,

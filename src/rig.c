@@ -128,10 +128,11 @@ static int automatic_substeps(const gs_rig *r)
     return n;
 }
 
-/* h*omega_n of the contact at sub-step h (omega_n = sqrt(K/m_eff)). */
-static gs_real contact_h_omega_n(const gs_rig *r, gs_real h)
+/* h*omega_n of the contact at sub-step h with 1/m_eff = inv_mass
+ * (omega_n = sqrt(K/m_eff)). */
+static gs_real contact_h_omega_n(const gs_rig *r, gs_real h, gs_real inv_mass)
 {
-    const gs_real x2 = h * h * r->mesh.stiffness * contact_inverse_mass(r, h);
+    const gs_real x2 = h * h * r->mesh.stiffness * inv_mass;
     /* Newton for the square root (the core uses no libm), from above: it
      * decreases monotonically to the root; init only, so the count is loose */
     gs_real y = x2 > GS_R(1.0) ? x2 : GS_R(1.0);
@@ -185,7 +186,7 @@ static void rig_fill(gs_rig *r, gs_rig_block block, const gs_rig_params *p)
             gs_contact_prepare(&r->mesh, r->substep,
                                base_inverse_mass(r, r->substep), &r->contact_stuck);
         }
-        r->contact_h_omega_n = contact_h_omega_n(r, r->substep);
+        r->contact_h_omega_n = contact_h_omega_n(r, r->substep, r->inv_eff_mass_contact);
         r->substeps_capped = p->contact_substeps == 0 && r->contact_h_omega_n > GS_R(0.5);
     }
     gs_rig_reset(r);
@@ -362,6 +363,13 @@ static inline substep_end contact_moving(gs_rig *r, gs_real w_b_free, gs_real w_
     return e;
 }
 
+/* contact_moving with a friction torque `friction` (N*m or N, on the
+ * follower) added to the free motion: sliding against the motion. */
+static inline substep_end contact_sliding(gs_rig *r, gs_real w_b_free, gs_real momentum, gs_real friction)
+{
+    return contact_moving(r, w_b_free, (momentum + r->substep * friction) * r->inv_driven_inertia_sub);
+}
+
 /* One sub-step with the follower held at rest by its friction: the contact
  * sees the base alone. A speed-driven base imposes the tooth motion, so the
  * force is the law at the end of the sub-step; a torque-driven base solves
@@ -394,7 +402,6 @@ static substep_end substep_with_friction(gs_rig *r, gs_real w_b_free, gs_real mo
                                          gs_real *friction)
 {
     gs_mesh_ *m = &r->mesh;
-    const gs_real h = r->substep;
     const gs_real w_f = r->driven_speed;
     const int locked = m->locked;
     substep_end e;
@@ -403,10 +410,9 @@ static substep_end substep_with_friction(gs_rig *r, gs_real w_b_free, gs_real mo
         return contact_moving(r, w_b_free, momentum * r->inv_driven_inertia_sub);
     }
     if (w_f > GS_R(0.0) || w_f < GS_R(0.0)) {
-        const gs_real sigma = gs_sign(w_f);
-        e = contact_moving(r, w_b_free, (momentum - h * sigma * bound) * r->inv_driven_inertia_sub);
-        if (sigma * e.w_f >= GS_R(0.0)) { /* at exactly 0 any friction within the bound is consistent */
-            *friction = -sigma * bound;
+        *friction = -gs_sign(w_f) * bound;
+        e = contact_sliding(r, w_b_free, momentum, *friction);
+        if (*friction * e.w_f <= GS_R(0.0)) { /* at exactly 0 any friction within the bound is consistent */
             return e;
         }
         m->locked = locked;
@@ -419,10 +425,9 @@ static substep_end substep_with_friction(gs_rig *r, gs_real w_b_free, gs_real mo
         return e;
     }
     m->locked = locked;
-    const gs_real sigma = needed < GS_R(0.0) ? GS_R(1.0) : GS_R(-1.0); /* the way the rest pushes */
-    e = contact_moving(r, w_b_free, (momentum - h * sigma * bound) * r->inv_driven_inertia_sub);
-    if (sigma * e.w_f >= GS_R(0.0)) {
-        *friction = -sigma * bound;
+    *friction = needed < GS_R(0.0) ? -bound : bound; /* against the way the rest pushes */
+    e = contact_sliding(r, w_b_free, momentum, *friction);
+    if (*friction * e.w_f <= GS_R(0.0)) {
         return e;
     }
     /* Only with the static-contact lock: the locked follower moves with the
@@ -431,10 +436,9 @@ static substep_end substep_with_friction(gs_rig *r, gs_real w_b_free, gs_real mo
      * the lock's hysteresis leaves no consistent friction: the sub-step runs
      * without it (a fifth solve), which never does negative work. */
     m->locked = locked;
-    const gs_real sigma_locked = gs_sign(e.w_f);
-    e = contact_moving(r, w_b_free, (momentum - h * sigma_locked * bound) * r->inv_driven_inertia_sub);
-    if (sigma_locked * e.w_f >= GS_R(0.0)) {
-        *friction = -sigma_locked * bound;
+    *friction = -gs_sign(e.w_f) * bound;
+    e = contact_sliding(r, w_b_free, momentum, *friction);
+    if (*friction * e.w_f <= GS_R(0.0)) {
         return e;
     }
     m->locked = locked;

@@ -287,16 +287,27 @@ def _cell_value(draw, cls: str) -> str:
     return draw(st.sampled_from(["", " ", '""']))  # empty_field
 
 
+def _shared_mutation(
+    draw, cls: str, raw: bytes, text: str, name: str, note: list[str]
+) -> tuple[bytes, str] | None:
+    """The byte-level and compression mutations every file shares, as
+    (content, file name); None when cls is neither."""
+    out = _bytes_mutation(draw, cls, raw, text)
+    if out is not None:
+        return out, name
+    if cls in COMPRESSORS:
+        return _compress(draw, cls, raw, name, note)
+    return None
+
+
 def _mutate_csv(draw, cls: str, base: Base, note: list[str]) -> tuple[bytes, str]:
     header = list(base.csv_header)
     rows = [list(r) for r in base.csv_rows]
     text = base.csv_text
     name = "data.csv"
-    raw = _bytes_mutation(draw, cls, text.encode("utf-8"), text)
-    if raw is not None:
-        return raw, name
-    if cls in COMPRESSORS:
-        return _compress(draw, cls, text.encode("utf-8"), name, note)
+    shared = _shared_mutation(draw, cls, text.encode("utf-8"), text, name, note)
+    if shared is not None:
+        return shared
     if cls == "latin1":
         # an extra column whose header is not ASCII, the file in latin-1
         label = draw(st.sampled_from(["Temperatur_°C", "Drehzahl µ", "Moment_Nm_ü"]))
@@ -381,11 +392,9 @@ _NUMERIC_KEYS = [
 def _mutate_toml(draw, cls: str, base: Base, note: list[str]) -> tuple[bytes, str]:
     text = base.toml_text
     name = "model.toml"
-    raw = _bytes_mutation(draw, cls, text.encode("utf-8"), text)
-    if raw is not None:
-        return raw, name
-    if cls in COMPRESSORS:
-        return _compress(draw, cls, text.encode("utf-8"), name, note)
+    shared = _shared_mutation(draw, cls, text.encode("utf-8"), text, name, note)
+    if shared is not None:
+        return shared
     if cls == "latin1":
         note = draw(st.sampled_from(["# Prüfstand 3, Öl bei 80 °C", "# µ-Getriebe"]))
         return (note + "\n" + text).encode("latin-1"), name
@@ -476,11 +485,9 @@ def _mutate_log(draw, cls: str, base: Base, tmp: Path, note: list[str]) -> tuple
         return raw, name
     raw = base.log_bytes[fmt]
     text = raw.decode("latin-1")
-    out = _bytes_mutation(draw, cls, raw, text)
-    if out is not None:
-        return out, name
-    if cls in COMPRESSORS:
-        return _compress(draw, cls, raw, name, note)
+    shared = _shared_mutation(draw, cls, raw, text, name, note)
+    if shared is not None:
+        return shared
     lines = text.splitlines()
     data = _asc_data_lines(lines)
     i = draw(st.sampled_from(data))

@@ -78,11 +78,13 @@ def check_output(
     *,
     option: str = "--out",
     directory: bool = False,
+    probe: bool = True,
 ) -> str:
     """Validates an output path before the command does any work; returns it
     as a string. ``inputs`` are the files the command reads (``None`` and
     ``"-"`` entries are ignored). ``directory``: the output is a directory
-    (created later by the command) rather than a file."""
+    (created later by the command) rather than a file. ``probe=False`` skips
+    the write probe of the directory, for files in one already checked."""
     if path is None or str(path).strip() == "":
         raise OutputPathError(f"{option}: empty path; name a file to write", parameter=option)
     target = os.fspath(path)
@@ -114,7 +116,8 @@ def check_output(
         raise OutputPathError(
             f"{option} {shown}: directory {printable(parent)} does not exist", parameter=option
         )
-    _check_writable(parent, option, shown)
+    if probe:
+        _check_writable(parent, option, shown)
     return target
 
 

@@ -218,7 +218,7 @@ def _check_out(
     out = check_output(args.out, inputs, option="--out", directory=directory)
     if directory and os.path.isdir(out):
         for name in files:
-            check_output(os.path.join(out, name), inputs, option="--out")
+            check_output(os.path.join(out, name), inputs, option="--out", probe=False)
     return out
 
 

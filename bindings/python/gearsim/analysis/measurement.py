@@ -59,7 +59,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .._outputs import printable
+from .._outputs import atomic_writer, printable
 from ..errors import caller_stacklevel
 from .errors import MeasurementError
 from .signals import describe_gap, sampling_gaps
@@ -1218,8 +1218,6 @@ def write_measurement(path: str | os.PathLike[str], meas: Measurement, *, digits
     cols = [meas.time] + [meas.data[c] for c in names[1:]]
     arr = np.column_stack(cols)
     fmt = f"%.{digits}g"
-    tmp = os.fspath(path) + ".tmp"
-    with open(tmp, "w", newline="\n") as fh:
+    with atomic_writer(path, "w", newline="\n") as fh:
         fh.write(",".join(names) + "\n")
         np.savetxt(fh, arr, delimiter=",", fmt=fmt)
-    os.replace(tmp, path)
