@@ -308,7 +308,7 @@ def backlash_ode(
         rhs, (0.0, n * dt), y0, method=method, t_eval=t_eval, rtol=rtol, atol=atol, max_step=dt
     )
     return {
-        "driven_speed": sol.y[1],
+        "follower_speed": sol.y[1],
         "backlash_position": sol.y[0],
         "nfev": int(sol.nfev),
         "status": int(sol.status),
@@ -544,7 +544,7 @@ def python_loop_full(
         out_x[i] = x
     return {
         "base_torque": out_tau_b,
-        "driven_speed": out_w_f,
+        "follower_speed": out_w_f,
         "temperature": out_temp,
         "backlash_position": out_x,
         "substeps": n,

@@ -229,11 +229,11 @@ def bench_full_loop(gearsim: Any, n_loop: int, gs_row: dict, repeats: int) -> di
     loop = alt.python_loop_full(wl, ll)  # also the warm-up of the timing
     t_loop = median_time(lambda: alt.python_loop_full(wl, ll), max(3, repeats // 2), warmup=0)
     tau = np.asarray(loop["base_torque"])
-    w_f = np.asarray(loop["driven_speed"])
+    w_f = np.asarray(loop["follower_speed"])
     tau_peak = float(np.max(np.abs(ref.base_torque)))
-    w_f_peak = float(np.max(np.abs(ref.driven_speed)))
+    w_f_peak = float(np.max(np.abs(ref.follower_speed)))
     tau_diff = float(np.max(np.abs(tau - ref.base_torque)))
-    w_f_diff = float(np.max(np.abs(w_f - ref.driven_speed)))
+    w_f_diff = float(np.max(np.abs(w_f - ref.follower_speed)))
     return {
         "config": "sg_full",
         "samples": n_loop,
@@ -275,14 +275,14 @@ def bench_ode(gearsim: Any, n: int, repeats: int) -> dict:
         "gearsim_run_long_cpu_ns_per_step": t_gs_long["cpu_median"] / (100 * n) * 1e9,
         "methods": [],
     }
-    rms_ref = float(np.sqrt(np.mean(ref.driven_speed**2)))
+    rms_ref = float(np.sqrt(np.mean(ref.follower_speed**2)))
     for method in ("RK45", "LSODA"):
         c0 = time.thread_time()
         t0 = time.perf_counter()
         sol = alt.backlash_ode(w, load, method=method)
         dt = time.perf_counter() - t0
         dc = time.thread_time() - c0
-        diff = sol["driven_speed"] - ref.driven_speed
+        diff = sol["follower_speed"] - ref.follower_speed
         out["methods"].append(
             {
                 "method": method,

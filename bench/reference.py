@@ -49,9 +49,9 @@ step means of torques, contact force and loss power are integrals over the
 step carried as extra states (not sub-step samples), divided by dt.
 
 Outputs (``Reference.run``) use gearsim's RigResult names: ``base_torque``,
-``base_port_torque``, ``driven_port_torque``, ``contact_force``,
+``base_port_torque``, ``follower_port_torque``, ``contact_force``,
 ``mesh_loss_power``, ``loss_power`` (step means), ``base_speed``,
-``base_angle``, ``driven_speed``, ``driven_position``, ``backlash_position``,
+``base_angle``, ``follower_speed``, ``follower_position``, ``backlash_position``,
 ``temperature`` (values at the end of each step); plus ``contact_changes``
 (per step, how often the teeth met or parted, |x| = b/2) and ``nfev``.
 ``Reference.rigid_speed_driven`` and ``Reference.rigid_torque_driven`` give
@@ -487,8 +487,8 @@ class Reference:
         tau_b = self.r_b * f + self.mu_b * w_b
         return {
             "base_port_torque": tau_b,
-            "driven_port_torque": tau_f,
-            "driven_speed": w_f,
+            "follower_port_torque": tau_f,
+            "follower_speed": w_f,
             "contact_force": f,
         }
 
@@ -496,7 +496,7 @@ class Reference:
         self,
         motor_torque: float,
         load: float,
-        driven_speed: float,
+        follower_speed: float,
         temperature: float | None = None,
     ) -> dict[str, float]:
         """Steady contact of the torque-driven rig: the teeth at rest relative
@@ -506,7 +506,7 @@ class Reference:
         ratio*(motor - mu_B*omega_B - T_B(T_F)) - J_B*ratio^2*a_F(T_F) = 0,
         where T_B = -r_B*T_F0/c_F and T_F0 = T_F - tau_mesh(T_F)."""
         temp = self.initial_temperature if temperature is None else temperature
-        w_f = driven_speed
+        w_f = follower_speed
         w_b = self.ratio * w_f
         ext = load + self.offset - self.coulomb * math.tanh(self.coulomb_gain * w_f)
         tau = self.loss.tau_mesh
@@ -529,8 +529,8 @@ class Reference:
         f, a_f, _ = parts(t_f)
         return {
             "base_port_torque": self.r_b * f + self.mu_b * w_b,
-            "driven_port_torque": t_f + self.mu_f * w_f,
-            "driven_acceleration": a_f,
+            "follower_port_torque": t_f + self.mu_f * w_f,
+            "follower_acceleration": a_f,
             "contact_force": f,
         }
 
@@ -633,14 +633,14 @@ class Reference:
             for name in (
                 "base_torque",
                 "base_port_torque",
-                "driven_port_torque",
+                "follower_port_torque",
                 "contact_force",
                 "mesh_loss_power",
                 "loss_power",
                 "base_speed",
                 "base_angle",
-                "driven_speed",
-                "driven_position",
+                "follower_speed",
+                "follower_position",
                 "backlash_position",
                 "temperature",
             )
@@ -694,14 +694,14 @@ class Reference:
             out["contact_changes"][k] = changes
             w_b = y[3] if torque_driven else previous
             out["base_port_torque"][k] = y[I_TB] / dt
-            out["driven_port_torque"][k] = y[I_TF] / dt
+            out["follower_port_torque"][k] = y[I_TF] / dt
             out["contact_force"][k] = y[I_F] / dt
             out["mesh_loss_power"][k] = y[I_PM] / dt
             out["loss_power"][k] = y[I_PL] / dt
             out["base_speed"][k] = w_b
             out["base_angle"][k] = y[4]
-            out["driven_speed"][k] = y[1]
-            out["driven_position"][k] = y[2]
+            out["follower_speed"][k] = y[1]
+            out["follower_position"][k] = y[2]
             out["backlash_position"][k] = y[0]
             out["temperature"][k] = y[5] if thermal_state else temps_in[k]
             if torque_driven:

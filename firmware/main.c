@@ -51,10 +51,10 @@ static void output_fields(const gs_rig_output *o, gs_real v[GS_RIG_OUTPUT_FIELDS
     v[0] = o->base_torque_Nm;
     v[1] = o->base_speed_rad_s;
     v[2] = o->base_angle_rad;
-    v[3] = o->driven_speed;
-    v[4] = o->driven_position;
+    v[3] = o->follower_speed;
+    v[4] = o->follower_position;
     v[5] = o->base_port_torque_Nm;
-    v[6] = o->driven_port_torque;
+    v[6] = o->follower_port_torque;
     v[7] = o->mesh_loss_power_W;
     v[8] = o->loss_power_W;
     v[9] = o->port_power_W;
@@ -62,7 +62,7 @@ static void output_fields(const gs_rig_output *o, gs_real v[GS_RIG_OUTPUT_FIELDS
     v[11] = o->temperature_K;
     v[12] = o->backlash_position_m;
     v[13] = o->contact_force_N;
-    v[14] = o->driven_acceleration;
+    v[14] = o->follower_acceleration;
 }
 
 #ifdef FW_TARGET

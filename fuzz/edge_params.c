@@ -174,7 +174,7 @@ static int run(const edge_case *c, gs_base_drive drive, int heat_path)
             }
         }
         peak_torque = fmax(peak_torque, fabs((double)o.base_torque_Nm));
-        peak_speed = fmax(peak_speed, fabs((double)o.driven_speed));
+        peak_speed = fmax(peak_speed, fabs((double)o.follower_speed));
         peak_temp = fmax(peak_temp, (double)o.temperature_K);
         peak_force = fmax(peak_force, fabs((double)o.contact_force_N));
     }

@@ -292,10 +292,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         const double port = (double)o->port_power_W;
         const double loss = (double)o->loss_power_W;
         const double w_b = fabs((double)o->base_speed_rad_s);
-        const double w_f = fabs((double)o->driven_speed);
+        const double w_f = fabs((double)o->follower_speed);
         /* magnitude of the terms whose rounding the balance carries */
         const double scale = fabs((double)o->base_port_torque_Nm) * w_b
-                             + fabs((double)o->driven_port_torque) * w_f + fabs(loss) + fabs(port)
+                             + fabs((double)o->follower_port_torque) * w_f + fabs(loss) + fabs(port)
                              + fabs((double)o->contact_force_N) * (info.r_base * w_b + info.r_follow * w_f);
         /* With backlash the relative tooth speed is the difference of the free
          * speeds that the contact and external impulses produce in a sub-step;

@@ -226,9 +226,9 @@ void gs_rig_reset(gs_rig *rig)
     gs_mesh_reset(&rig->mesh);
     rig->started = 0;
     rig->base_speed = rig->base_drive == GS_BASE_TORQUE_DRIVEN ? rig->initial_base_speed : GS_R(0.0);
-    rig->driven_speed = rig->mesh.inv_ratio * rig->base_speed;
+    rig->follower_speed = rig->mesh.inv_ratio * rig->base_speed;
     rig->base_angle = GS_R(0.0);
-    rig->driven_position = GS_R(0.0);
+    rig->follower_position = GS_R(0.0);
     rig->previous_base_speed_input = GS_R(0.0);
     rig->base_acceleration = GS_R(0.0);
 }
@@ -239,8 +239,8 @@ void gs_rig_copy_state(gs_rig *to, const gs_rig *from)
     to->started = from->started;
     to->base_speed = from->base_speed;
     to->base_angle = from->base_angle;
-    to->driven_speed = from->driven_speed;
-    to->driven_position = from->driven_position;
+    to->follower_speed = from->follower_speed;
+    to->follower_position = from->follower_position;
     to->previous_base_speed_input = from->previous_base_speed_input;
     to->base_acceleration = from->base_acceleration;
 }
@@ -279,11 +279,11 @@ static void rigid_speed_driven(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_
     const gs_real tau_b = m->mu_base * w_b + m->inv_ratio * (tau_mesh - t_f);
     m->last_follower_torque = t_f;
     r->base_speed = w_b;
-    r->driven_speed = w_f;
+    r->follower_speed = w_f;
     out->base_torque_Nm = tau_b + r->base_inertia * alpha_b;
     out->base_port_torque_Nm = tau_b;
-    out->driven_port_torque = tau_f;
-    out->driven_acceleration = a_f;
+    out->follower_port_torque = tau_f;
+    out->follower_acceleration = a_f;
     out->mesh_loss_power_W = tau_mesh * w_f;
     out->loss_power_W = out->mesh_loss_power_W + m->mu_base * w_b * w_b + m->mu_follower * w_f * w_f;
     out->port_power_W = tau_b * w_b + tau_f * w_f;
@@ -325,11 +325,11 @@ static void rigid_torque_driven(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig
     const gs_real tau_f = t_f + m->mu_follower * w_f;
     m->last_follower_torque = t_f;
     r->base_speed = w_next;
-    r->driven_speed = w_f;
+    r->follower_speed = w_f;
     out->base_torque_Nm = in->base_torque_Nm;
     out->base_port_torque_Nm = tau_b;
-    out->driven_port_torque = tau_f;
-    out->driven_acceleration = a * dw / h;
+    out->follower_port_torque = tau_f;
+    out->follower_acceleration = a * dw / h;
     out->mesh_loss_power_W = tau_mesh * w_f;
     out->loss_power_W = out->mesh_loss_power_W + m->mu_base * w_next * w_next + m->mu_follower * w_f * w_f;
     out->port_power_W = tau_b * w_next + tau_f * w_f;
@@ -402,7 +402,7 @@ static substep_end substep_with_friction(gs_rig *r, gs_real w_b_free, gs_real mo
                                          gs_real *friction)
 {
     gs_mesh_ *m = &r->mesh;
-    const gs_real w_f = r->driven_speed;
+    const gs_real w_f = r->follower_speed;
     const int locked = m->locked;
     substep_end e;
     if (!(bound > GS_R(0.0))) {
@@ -456,12 +456,12 @@ static void backlash_step(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input
     const gs_real sr_f = m->direction * m->follower_radius;
     const int speed_driven = r->base_drive == GS_BASE_SPEED_DRIVEN;
     const gs_real w_b_start = r->base_speed;
-    const gs_real w_f_start = r->driven_speed;
+    const gs_real w_f_start = r->follower_speed;
     const gs_real push = in->load + r->load_offset;
     gs_real sum_tau_b = GS_R(0.0), sum_tau_f = GS_R(0.0), sum_mesh = GS_R(0.0), sum_loss = GS_R(0.0);
     gs_real sum_port = GS_R(0.0), sum_f = GS_R(0.0);
     for (int k = 0; k < n; ++k) {
-        const gs_real w_f = r->driven_speed;
+        const gs_real w_f = r->follower_speed;
         /* The meshing loss on the last contact force (physics.md 4.6) acts as
          * a friction on the follower, bounded like the load's Coulomb
          * friction. Only its part that opposes the motion is applied: the
@@ -488,9 +488,9 @@ static void backlash_step(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input
         m->position += h * e.u;
         m->contact_force = e.f;
         r->base_speed = e.w_b;
-        r->driven_speed = e.w_f;
+        r->follower_speed = e.w_f;
         r->base_angle += h * e.w_b;
-        r->driven_position += h * e.w_f;
+        r->follower_position += h * e.w_f;
         const gs_real tau_b = r_b * e.f + m->mu_base * e.w_b;
         const gs_real tau_f = -sr_f * e.f + tau_mesh + m->mu_follower * e.w_f;
         /* paired with the end speeds like every port term: the power identity
@@ -508,12 +508,12 @@ static void backlash_step(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input
     out->base_port_torque_Nm = sum_tau_b * inv_n;
     out->base_torque_Nm = speed_driven ? out->base_port_torque_Nm + r->base_inertia * r->base_acceleration
                                        : in->base_torque_Nm;
-    out->driven_port_torque = sum_tau_f * inv_n;
+    out->follower_port_torque = sum_tau_f * inv_n;
     out->mesh_loss_power_W = sum_mesh * inv_n;
     out->loss_power_W = sum_loss * inv_n;
     out->port_power_W = sum_port * inv_n;
     out->contact_force_N = sum_f * inv_n;
-    out->driven_acceleration = (r->driven_speed - w_f_start) / r->dt;
+    out->follower_acceleration = (r->follower_speed - w_f_start) / r->dt;
 }
 
 void gs_rig_step(gs_rig *r, const gs_rig_input *in, gs_rig_output *out)
@@ -526,7 +526,7 @@ void gs_rig_step(gs_rig *r, const gs_rig_input *in, gs_rig_output *out)
             /* the first sample sets the speeds: no acceleration, teeth moving together */
             r->previous_base_speed_input = w_in;
             r->base_speed = w_in;
-            r->driven_speed = m->inv_ratio * w_in;
+            r->follower_speed = m->inv_ratio * w_in;
         }
         const gs_real raw = (w_in - r->previous_base_speed_input) / r->dt;
         r->base_acceleration += r->accel_gain * (raw - r->base_acceleration);
@@ -545,7 +545,7 @@ void gs_rig_step(gs_rig *r, const gs_rig_input *in, gs_rig_output *out)
             rigid_torque_driven(r, &ctx, in, out);
         }
         r->base_angle += r->dt * r->base_speed;
-        r->driven_position += r->dt * r->driven_speed;
+        r->follower_position += r->dt * r->follower_speed;
     }
     if (from_input) {
         m->temperature = in->measured_temperature_K;
@@ -555,8 +555,8 @@ void gs_rig_step(gs_rig *r, const gs_rig_input *in, gs_rig_output *out)
     }
     out->base_speed_rad_s = r->base_speed;
     out->base_angle_rad = r->base_angle;
-    out->driven_speed = r->driven_speed;
-    out->driven_position = r->driven_position;
+    out->follower_speed = r->follower_speed;
+    out->follower_position = r->follower_position;
     out->contact_energy_J = m->backlash ? gs_contact_energy(m, m->position) : GS_R(0.0);
     out->temperature_K = m->temperature;
     out->backlash_position_m = m->position;

@@ -275,10 +275,10 @@ typedef struct {
     gs_real base_torque_Nm;
     gs_real base_speed_rad_s;
     gs_real base_angle_rad;
-    gs_real driven_speed;
-    gs_real driven_position;
+    gs_real follower_speed;
+    gs_real follower_position;
     gs_real base_port_torque_Nm;
-    gs_real driven_port_torque;
+    gs_real follower_port_torque;
     gs_real mesh_loss_power_W;
     gs_real loss_power_W;
     gs_real port_power_W;
@@ -286,7 +286,7 @@ typedef struct {
     gs_real temperature_K;
     gs_real backlash_position_m;
     gs_real contact_force_N;
-    gs_real driven_acceleration;
+    gs_real follower_acceleration;
     ...;
 } gs_rig_output;
 

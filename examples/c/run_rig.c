@@ -33,7 +33,7 @@ static int run_gear(void)
         gs_rig_step(&rig, &in, &out);
         if (i % 250 == 0) {
             printf("%8.3f %12.3f %12.3f %14.5f %14.5f %12.4f\n", (double)t, (double)in.base_speed_rad_s,
-                   (double)in.load, (double)out.base_torque_Nm, (double)out.driven_speed,
+                   (double)in.load, (double)out.base_torque_Nm, (double)out.follower_speed,
                    (double)out.loss_power_W);
         }
     }
@@ -64,7 +64,7 @@ static int run_rack(void)
         gs_rig_step(&rig, &in, &out);
         if (i % 250 == 0) {
             printf("%8.3f %12.3f %14.5f %14.5f %14.5f\n", (double)t, (double)in.base_speed_rad_s,
-                   (double)out.base_torque_Nm, (double)out.driven_speed, (double)out.driven_position);
+                   (double)out.base_torque_Nm, (double)out.follower_speed, (double)out.follower_position);
         }
     }
     return 0;

@@ -241,14 +241,14 @@ static void initial_outputs(fmu_data *d)
     if (r->base_drive == GS_BASE_SPEED_DRIVEN) {
         /* the first step takes the input speed with teeth moving together */
         o->base_speed_rad_s = d->input.base_speed_rad_s;
-        o->driven_speed = r->mesh.inv_ratio * d->input.base_speed_rad_s;
+        o->follower_speed = r->mesh.inv_ratio * d->input.base_speed_rad_s;
     } else {
         o->base_torque_Nm = d->input.base_torque_Nm;
         o->base_speed_rad_s = r->base_speed;
-        o->driven_speed = r->driven_speed;
+        o->follower_speed = r->follower_speed;
     }
     o->base_angle_rad = r->base_angle;
-    o->driven_position = r->driven_position;
+    o->follower_position = r->follower_position;
     o->temperature_K = r->temperature_source == GS_TEMPERATURE_FROM_INPUT ? d->input.measured_temperature_K
                                                                           : r->mesh.temperature;
     o->backlash_position_m = r->mesh.position;

@@ -325,10 +325,10 @@ static const entry output_entries[] = {
          "torque the drive applies to the base shaft (torque-driven: the input motor_torque)"),
     OUT_("base_speed", base_speed_rad_s, "rad/s", "base (pinion) shaft speed"),
     OUT_("base_angle", base_angle_rad, "rad", "base (pinion) shaft angle"),
-    OUT2_("driven_speed", driven_speed, "rad/s", "follower shaft speed", "m/s", "rack velocity"),
-    OUT2_("driven_position", driven_position, "rad", "follower shaft angle", "m", "rack position"),
+    OUT2_("follower_speed", follower_speed, "rad/s", "follower shaft speed", "m/s", "rack velocity"),
+    OUT2_("follower_position", follower_position, "rad", "follower shaft angle", "m", "rack position"),
     OUT_("base_port_torque", base_port_torque_Nm, "N.m", "torque the base shaft applies to the block"),
-    OUT2_("driven_port_torque", driven_port_torque, "N.m", "torque the follower side applies to the block",
+    OUT2_("follower_port_torque", follower_port_torque, "N.m", "torque the follower side applies to the block",
           "N", "force the rack side applies to the block"),
     OUT_("mesh_loss_power", mesh_loss_power_W, "W", "meshing loss power (>= 0)"),
     OUT_("loss_power", loss_power_W, "W", "mesh + viscous + contact damping loss power"),
@@ -337,7 +337,7 @@ static const entry output_entries[] = {
     OUT_("temperature", temperature_K, "K", "block temperature (thermal state, or measured_temperature)"),
     OUT_("backlash_position", backlash_position_m, "m", "backlash position x"),
     OUT_("contact_force", contact_force_N, "N", "backlash contact force, mean over the last internal step"),
-    OUT2_("driven_acceleration", driven_acceleration, "rad/s2", "follower angular acceleration", "m/s2",
+    OUT2_("follower_acceleration", follower_acceleration, "rad/s2", "follower angular acceleration", "m/s2",
           "rack acceleration"),
 };
 

@@ -92,10 +92,10 @@ typedef struct {
                                        base_port_torque + J_B*alpha_B; torque-driven: the input) */
     gs_real base_speed_rad_s;
     gs_real base_angle_rad;
-    gs_real driven_speed;           /* follower rad/s or rack m/s */
-    gs_real driven_position;        /* follower rad or rack m */
+    gs_real follower_speed;           /* follower rad/s or rack m/s */
+    gs_real follower_position;        /* follower rad or rack m */
     gs_real base_port_torque_Nm;    /* tau_B: what the base shaft applies to the block */
-    gs_real driven_port_torque;     /* tau_F (N*m) or F_R (N): what the driven side applies to the block */
+    gs_real follower_port_torque;     /* tau_F (N*m) or F_R (N): what the driven side applies to the block */
     gs_real mesh_loss_power_W;      /* meshing loss, >= 0 */
     gs_real loss_power_W;           /* mesh + viscous + contact damping, >= 0 */
     gs_real port_power_W;           /* power into the block through both ports */
@@ -103,7 +103,7 @@ typedef struct {
     gs_real temperature_K;          /* block temperature at the end of the step (state, or the input) */
     gs_real backlash_position_m;
     gs_real contact_force_N;
-    gs_real driven_acceleration;    /* follower rad/s^2 or rack m/s^2 */
+    gs_real follower_acceleration;    /* follower rad/s^2 or rack m/s^2 */
 } gs_rig_output;
 
 #define GS_RIG_OUTPUT_FIELDS 15
@@ -139,8 +139,8 @@ typedef struct {
     int started;
     gs_real base_speed;
     gs_real base_angle;
-    gs_real driven_speed;
-    gs_real driven_position;
+    gs_real follower_speed;
+    gs_real follower_position;
     gs_real previous_base_speed_input;
     gs_real base_acceleration;
 } gs_rig;

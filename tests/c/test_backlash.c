@@ -191,7 +191,7 @@ static void test_lost_motion_gear(void **state)
         {
             const gs_rig_input rest = rig_speed_input(0.0, 0.0);
             gs_rig_step(&rig, &rest, &out);
-            ASSERT_NEAR(out.driven_speed, 0.0, 0.0, 0.0);
+            ASSERT_NEAR(out.follower_speed, 0.0, 0.0, 0.0);
             ASSERT_NEAR(out.backlash_position_m, 0.0, 0.0, 0.0);
         }
         in = rig_speed_input(wB, 0.0);
@@ -200,7 +200,7 @@ static void test_lost_motion_gear(void **state)
             gs_rig_step(&rig, &in, &out);
             assert_true(rig_output_finite(&out));
             if (k_contact < 0) {
-                if (!is_zero((double)out.contact_force_N) || !is_zero((double)out.driven_speed)) {
+                if (!is_zero((double)out.contact_force_N) || !is_zero((double)out.follower_speed)) {
                     k_contact = k;
                 } else if (k >= 2) {
                     /* free play: x advances by v*dt, nothing moves the follower */
@@ -214,7 +214,7 @@ static void test_lost_motion_gear(void **state)
         }
         assert_contact_step("lost motion", k_contact, dt, t_contact);
         /* afterwards the base carries the follower: omega_F = s*omega_B/g */
-        ASSERT_NEAR(out.driven_speed, s * wB / g, 1e-3, 0.0);
+        ASSERT_NEAR(out.follower_speed, s * wB / g, 1e-3, 0.0);
         assert_true((double)out.backlash_position_m > b / 2.0 - 1e-5);
     }
 }
@@ -257,11 +257,11 @@ static void test_lost_motion_rack(void **state)
             gs_rig_step(&rig, &in, &out);
             assert_true(rig_output_finite(&out));
             if (k_contact < 0 &&
-                (!is_zero((double)out.contact_force_N) || !is_zero((double)out.driven_speed)))
+                (!is_zero((double)out.contact_force_N) || !is_zero((double)out.follower_speed)))
                 k_contact = k;
         }
         assert_contact_step("rack lost motion", k_contact, dt, t_contact);
-        ASSERT_NEAR(out.driven_speed, rack_sign(dirs[id]) * r * wP, 1e-3, 0.0);
+        ASSERT_NEAR(out.follower_speed, rack_sign(dirs[id]) * r * wP, 1e-3, 0.0);
     }
 }
 
@@ -297,15 +297,15 @@ static impact_result impact(gs_hard_stop_model m, double D, int no_pull, int sub
         double w, f, x;
         gs_rig_step(&rig, &in, &out);
         assert_true(rig_output_finite(&out));
-        w = (double)out.driven_speed;
+        w = (double)out.follower_speed;
         f = (double)out.contact_force_N;
         x = (double)out.backlash_position_m;
         /* Newton on the follower: J*dw/dt = load - tau_F, tau_F = -s*r_F*f */
         {
             const double scale = fabs(load) + rF * fabs(f) + 1e-6;
-            ASSERT_NEAR(out.driven_port_torque, -s * rF * f, TOL_REL, 1e-12);
+            ASSERT_NEAR(out.follower_port_torque, -s * rF * f, TOL_REL, 1e-12);
             /* rounding: the speed is accumulated over the sub-steps */
-            ASSERT_NEAR(JF * (w - w_prev) / dt, load - (double)out.driven_port_torque,
+            ASSERT_NEAR(JF * (w - w_prev) / dt, load - (double)out.follower_port_torque,
                         dmax(1e-7, TOL_REL),
                         1e-9 * scale + (substeps + 8) * GS_EPS * JF * (fabs(w) + fabs(w_prev)) / dt);
         }
@@ -414,7 +414,7 @@ static void run_stiff(gs_hard_stop_model m, int substeps, double load_amp)
         double w, f, e;
         gs_rig_step(&rig, &in, &out);
         assert_true(rig_output_finite(&out));
-        w = (double)out.driven_speed;
+        w = (double)out.follower_speed;
         f = (double)out.contact_force_N;
         e = (double)out.contact_energy_J;
         if (!(fabs((double)out.backlash_position_m) <= b / 2.0 + 1e-5) ||
@@ -435,7 +435,7 @@ static void run_stiff(gs_hard_stop_model m, int substeps, double load_amp)
         {
             const double gross =
                 (fabs((double)out.base_port_torque_Nm * (double)out.base_speed_rad_s) +
-                 fabs((double)out.driven_port_torque * w)) *
+                 fabs((double)out.follower_port_torque * w)) *
                 dt;
             /* + rounding of the stored energy: x is known to ~eps*b, so E to
              * ~|f|*eps*b (negligible in double, ~1e-11 J in float here) */

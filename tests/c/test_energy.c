@@ -100,7 +100,7 @@ static gs_rig_input walk_input(gs_base_drive drive, const walk *w)
 static void check_rigid_step(const gs_rig_output *o, gs_base_drive drive, int passive)
 {
     const double gross = fabs((double)o->base_port_torque_Nm * (double)o->base_speed_rad_s) +
-                         fabs((double)o->driven_port_torque * (double)o->driven_speed);
+                         fabs((double)o->follower_port_torque * (double)o->follower_speed);
     assert_true(rig_output_finite(o));
     if (passive) {
         assert_true((double)o->mesh_loss_power_W >= 0.0);
@@ -111,7 +111,7 @@ static void check_rigid_step(const gs_rig_output *o, gs_base_drive drive, int pa
     if (drive == GS_BASE_SPEED_DRIVEN) {
         /* port power = tau_B*omega_B + tau_F*omega_F of the same step */
         const double pp = (double)o->base_port_torque_Nm * (double)o->base_speed_rad_s +
-                          (double)o->driven_port_torque * (double)o->driven_speed;
+                          (double)o->follower_port_torque * (double)o->follower_speed;
         ASSERT_NEAR(o->port_power_W, pp, 0.0, TOL_REL * gross + 1e-12);
     }
     ASSERT_NEAR(o->contact_energy_J, 0.0, 0.0, 0.0); /* rigid: nothing stored */
@@ -229,7 +229,7 @@ static void check_backlash_step(const gs_rig_output *o, double e_prev, double f_
 {
     const double e = (double)o->contact_energy_J;
     const double gross = (fabs((double)o->base_port_torque_Nm * (double)o->base_speed_rad_s) +
-                          fabs((double)o->driven_port_torque * (double)o->driven_speed)) *
+                          fabs((double)o->follower_port_torque * (double)o->follower_speed)) *
                          dt;
     /* rounding slack: the energies' own scale, and the stored energy's
      * sensitivity to the rounding of x (~|f|*eps*b, b = 1e-3 m here) */
@@ -249,7 +249,7 @@ static void check_backlash_step(const gs_rig_output *o, double e_prev, double f_
                     label, step, (double)o->loss_power_W, (double)o->mesh_loss_power_W,
                     (double)o->port_power_W, e_prev, e, lhs - rhs, tol,
                     (double)o->backlash_position_m, (double)o->contact_force_N,
-                    (double)o->base_speed_rad_s, (double)o->driven_speed);
+                    (double)o->base_speed_rad_s, (double)o->follower_speed);
         fail();
     }
 }

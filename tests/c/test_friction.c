@@ -99,8 +99,8 @@ static void check_gear_point(const gs_simple_gear_params *gp, double wB, double 
         ri.measured_temperature_K = R(temp_K);
     for (k = 0; k < 5; ++k)
         gs_rig_step(&rig, &ri, &ro);
-    ASSERT_NEAR(ro.driven_speed, wF, TOL_REL, 0.0);
-    ASSERT_NEAR(ro.driven_port_torque, tauF, TOL_REL, 0.0);
+    ASSERT_NEAR(ro.follower_speed, wF, TOL_REL, 0.0);
+    ASSERT_NEAR(ro.follower_port_torque, tauF, TOL_REL, 0.0);
     ASSERT_NEAR(ro.base_port_torque_Nm, tauB, TOL_REL, 0.0);
     ASSERT_NEAR(ro.base_torque_Nm, tauB, TOL_REL, 0.0);
     ASSERT_NEAR(ro.mesh_loss_power_W, e.mesh_power, TOL_REL, 1e-12);
@@ -455,8 +455,8 @@ static void check_rack_point(const gs_rack_pinion_params *pp, double wP, double 
         ri.measured_temperature_K = R(temp_K);
     for (k = 0; k < 5; ++k)
         gs_rig_step(&rig, &ri, &ro);
-    ASSERT_NEAR(ro.driven_speed, v, TOL_REL, 0.0);
-    ASSERT_NEAR(ro.driven_port_torque, FR, TOL_REL, 0.0);
+    ASSERT_NEAR(ro.follower_speed, v, TOL_REL, 0.0);
+    ASSERT_NEAR(ro.follower_port_torque, FR, TOL_REL, 0.0);
     ASSERT_NEAR(ro.base_port_torque_Nm, tauP, TOL_REL, 0.0);
     ASSERT_NEAR(ro.mesh_loss_power_W, mesh, TOL_REL, 1e-12);
     ASSERT_NEAR(ro.loss_power_W, loss, TOL_REL, 1e-12);

@@ -48,15 +48,15 @@ static void test_gear_rig_speed_driven_signs(void **state)
             for (k = 1; k <= 6; ++k) {
                 gs_rig_step(&rig, &in, &out);
                 ASSERT_NEAR(out.base_speed_rad_s, wB, TOL_REL, 0.0);
-                ASSERT_NEAR(out.driven_speed, s * (double)in.base_speed_rad_s / g, TOL_REL, 0.0);
+                ASSERT_NEAR(out.follower_speed, s * (double)in.base_speed_rad_s / g, TOL_REL, 0.0);
                 /* rigid mesh from a common zero: theta_F = s*theta_B/g */
-                ASSERT_NEAR(out.driven_position, s * (double)out.base_angle_rad / g, TOL_REL,
+                ASSERT_NEAR(out.follower_position, s * (double)out.base_angle_rad / g, TOL_REL,
                             1e-12);
                 if (k >= 2) {
                     ASSERT_NEAR((double)out.base_angle_rad - (double)prev.base_angle_rad, wB * dt,
                                 TOL_ACC, 0.0);
-                    ASSERT_NEAR(out.driven_acceleration, 0.0, 0.0, 1e-9);
-                    ASSERT_NEAR(out.driven_port_torque, load, TOL_REL, 0.0);
+                    ASSERT_NEAR(out.follower_acceleration, 0.0, 0.0, 1e-9);
+                    ASSERT_NEAR(out.follower_port_torque, load, TOL_REL, 0.0);
                     ASSERT_NEAR(out.base_port_torque_Nm, -s * load / g, TOL_REL, 0.0);
                     ASSERT_NEAR(out.base_torque_Nm, -s * load / g, TOL_REL, 0.0);
                     /* ideal gear: no loss, port powers cancel */
@@ -68,7 +68,7 @@ static void test_gear_rig_speed_driven_signs(void **state)
             }
             /* the drive supplies power iff the load opposes the follower */
             assert_true(((double)out.base_torque_Nm * wB > 0.0) ==
-                        (load * (double)out.driven_speed < 0.0));
+                        (load * (double)out.follower_speed < 0.0));
         }
     }
 }
@@ -128,10 +128,10 @@ static void test_rack_signs(void **state)
             INIT_RACK_RIG(&rig, &pp, &rp);
             for (k = 1; k <= 5; ++k)
                 gs_rig_step(&rig, &in, &out);
-            ASSERT_NEAR(out.driven_speed, sR * r * wP, TOL_REL, 0.0);
-            ASSERT_NEAR(out.driven_position, sR * r * (double)out.base_angle_rad, TOL_REL, 1e-12);
-            ASSERT_NEAR(out.driven_acceleration, 0.0, 0.0, 1e-9);
-            ASSERT_NEAR(out.driven_port_torque, force, TOL_REL, 0.0);
+            ASSERT_NEAR(out.follower_speed, sR * r * wP, TOL_REL, 0.0);
+            ASSERT_NEAR(out.follower_position, sR * r * (double)out.base_angle_rad, TOL_REL, 1e-12);
+            ASSERT_NEAR(out.follower_acceleration, 0.0, 0.0, 1e-9);
+            ASSERT_NEAR(out.follower_port_torque, force, TOL_REL, 0.0);
             ASSERT_NEAR(out.base_port_torque_Nm, -sR * r * force, TOL_REL, 0.0);
             ASSERT_NEAR(out.port_power_W, 0.0, 0.0, TOL_REL * fabs(force * r * wP));
 
@@ -171,7 +171,7 @@ static void test_tooth_parameterization(void **state)
         INIT_RACK_RIG(&rig, &pp, &rp);
         for (k = 1; k <= 4; ++k)
             gs_rig_step(&rig, &in, &out);
-        ASSERT_NEAR(out.driven_speed, rack_sign(pp.rack_directionality) * r * 6.0, TOL_REL, 0.0);
+        ASSERT_NEAR(out.follower_speed, rack_sign(pp.rack_directionality) * r * 6.0, TOL_REL, 0.0);
         ASSERT_NEAR(out.base_port_torque_Nm, -rack_sign(pp.rack_directionality) * r * -15.0,
                     TOL_REL, 0.0);
     }
@@ -224,8 +224,8 @@ static void test_gear_rig_inertia_and_load_terms(void **state)
                                     (double)rp.load_coulomb_friction * tanh(4.0 * wF / wth) -
                                     JF * alphaF;
                 const double tauB = -s * tauF / g;
-                ASSERT_NEAR(out.driven_acceleration, alphaF, 1e-9, 8.0 * GS_EPS * 3.0 / dt);
-                ASSERT_NEAR(out.driven_port_torque, tauF, 1e-9, 8.0 * GS_EPS * 3.0 / dt);
+                ASSERT_NEAR(out.follower_acceleration, alphaF, 1e-9, 8.0 * GS_EPS * 3.0 / dt);
+                ASSERT_NEAR(out.follower_port_torque, tauF, 1e-9, 8.0 * GS_EPS * 3.0 / dt);
                 ASSERT_NEAR(out.base_port_torque_Nm, tauB, 1e-9, 8.0 * GS_EPS * 3.0 / dt);
                 ASSERT_NEAR(out.base_torque_Nm, tauB + JB * alphaB, 1e-9, 8.0 * GS_EPS * 3.0 / dt);
             }
@@ -257,14 +257,14 @@ static void test_accel_filter_time_constant(void **state)
     for (k = 0; k < 20; ++k) {
         const gs_rig_input in = rig_speed_input(0.0, 0.0);
         gs_rig_step(&rig, &in, &out);
-        ASSERT_NEAR(out.driven_acceleration, 0.0, 0.0, 1e-12);
+        ASSERT_NEAR(out.follower_acceleration, 0.0, 0.0, 1e-12);
     }
     for (ramp = 1; ramp <= 400; ++ramp) {
         const gs_rig_input in = rig_speed_input(a * ramp * dt, 0.0);
         const double alphaF = a / 2.0; /* s = +1, g = 2 */
         double ratio;
         gs_rig_step(&rig, &in, &out);
-        ratio = (double)out.driven_acceleration / alphaF;
+        ratio = (double)out.follower_acceleration / alphaF;
         /* a low-pass never overshoots a step */
         assert_true(ratio > 0.0);
         ASSERT_LE(ratio, 1.0, tol);
@@ -309,14 +309,14 @@ static void run_torque_driven(gs_output_rotation rot, gs_friction_model fm, doub
         gs_rig_step(&rig, &in, &out);
         wB = (double)out.base_speed_rad_s;
         alpha = (wB - prev_w) / dt;
-        ASSERT_NEAR(out.driven_speed, s * wB / 2.0, TOL_REL, 1e-12);
+        ASSERT_NEAR(out.follower_speed, s * wB / 2.0, TOL_REL, 1e-12);
         ASSERT_NEAR(out.base_torque_Nm, motor, TOL_REL, 0.0);
         if (k >= 3) {
             ASSERT_NEAR(alpha, expected_alpha, 1e-7, 16.0 * GS_EPS * fabs(wB) / dt);
             /* Newton on the base shaft: J_B*alpha_B = T - tau_B */
             ASSERT_NEAR(out.base_port_torque_Nm, motor - JB * alpha, 1e-7,
                         16.0 * GS_EPS * fabs(wB) / dt * JB);
-            ASSERT_NEAR(out.driven_acceleration, s * alpha / 2.0, 1e-7,
+            ASSERT_NEAR(out.follower_acceleration, s * alpha / 2.0, 1e-7,
                         16.0 * GS_EPS * fabs(wB) / dt);
         }
         prev_w = wB;

@@ -407,10 +407,10 @@ static int compare_settled(const case_label *cl, const run_result *r, const sett
                       p->tau_B, DRIFT(base_port_torque_Nm), rtol, tq_scale);
     ok &= check_value(cl, &header, "base_torque", (double)r->last.base_torque_Nm, p->tau_B,
                       DRIFT(base_torque_Nm), rtol, tq_scale);
-    ok &= check_value(cl, &header, "driven_port_torque", (double)r->last.driven_port_torque,
-                      p->tau_F, DRIFT(driven_port_torque), rtol, tq_scale);
-    ok &= check_value(cl, &header, "driven_speed", (double)r->last.driven_speed, p->omega_F,
-                      DRIFT(driven_speed), rtol, w_scale);
+    ok &= check_value(cl, &header, "follower_port_torque", (double)r->last.follower_port_torque,
+                      p->tau_F, DRIFT(follower_port_torque), rtol, tq_scale);
+    ok &= check_value(cl, &header, "follower_speed", (double)r->last.follower_speed, p->omega_F,
+                      DRIFT(follower_speed), rtol, w_scale);
     ok &= check_value(cl, &header, "base_speed", (double)r->last.base_speed_rad_s, p->omega_B,
                       DRIFT(base_speed_rad_s), rtol, w_scale);
 #undef DRIFT
@@ -810,18 +810,18 @@ static void test_stick_holds(void **state)
             for (k = 1; k <= 1000; ++k) {
                 gs_rig_step(&rig, &in, &out);
                 if (k >= 2 && first_bad < 0 &&
-                    (!is_zero((double)out.driven_speed) || !is_zero((double)out.base_speed_rad_s))) {
+                    (!is_zero((double)out.follower_speed) || !is_zero((double)out.base_speed_rad_s))) {
                     first_bad = k;
-                    bad_w = (double)out.driven_speed;
+                    bad_w = (double)out.follower_speed;
                     bad_wb = (double)out.base_speed_rad_s;
                 }
             }
             if (first_bad >= 0) {
                 print_error("stick (a) %s, load %+.1f below Coulomb %.1f: moves at step %d "
-                            "(driven_speed %.6g, base_speed %.6g; after 1000 steps %.6g, %.6g), "
+                            "(follower_speed %.6g, base_speed %.6g; after 1000 steps %.6g, %.6g), "
                             "expected exactly 0\n",
                             stick_configs[ic].name, load, S_COUL, first_bad, bad_w, bad_wb,
-                            (double)out.driven_speed, (double)out.base_speed_rad_s);
+                            (double)out.follower_speed, (double)out.base_speed_rad_s);
                 ++bad;
             }
         }
@@ -856,28 +856,28 @@ static void test_breakaway(void **state)
                 gs_rig_step(&rig, &in, &out);
                 if (!sc->backlash) {
                     const double want = k * DT * acc;
-                    const double err = fabs((double)out.driven_speed - want) / fabs(want);
+                    const double err = fabs((double)out.follower_speed - want) / fabs(want);
                     if (err > worst) {
                         worst = err;
                         worst_k = k;
                     }
                 }
                 if (k == 600)
-                    w600 = (double)out.driven_speed;
+                    w600 = (double)out.follower_speed;
             }
-            acc_meas = ((double)out.driven_speed - w600) / (200.0 * DT);
+            acc_meas = ((double)out.follower_speed - w600) / (200.0 * DT);
             if (!near_enough(acc_meas, acc, tol, 0.0) ||
-                !near_enough((double)out.driven_acceleration, acc, tol, 0.0) ||
-                !near_enough((double)out.base_speed_rad_s, rho * (double)out.driven_speed,
+                !near_enough((double)out.follower_acceleration, acc, tol, 0.0) ||
+                !near_enough((double)out.base_speed_rad_s, rho * (double)out.follower_speed,
                              sc->backlash ? 1e-3 : TOL_REL, 0.0) ||
                 worst > tol) {
                 print_error("breakaway (b) %s, load %+.1f, Coulomb %.1f, J_eff %.4g: acceleration "
                             "actual %.10g (output %.10g), expected %.10g; speed at 0.8 s %.10g, "
                             "expected %.10g; base/driven speed %.10g (rho %.6g); worst rel. speed "
                             "error %.3g at step %d\n",
-                            sc->name, load, S_COUL, J, acc_meas, (double)out.driven_acceleration,
-                            acc, (double)out.driven_speed, 800 * DT * acc,
-                            (double)out.base_speed_rad_s / (double)out.driven_speed, rho, worst,
+                            sc->name, load, S_COUL, J, acc_meas, (double)out.follower_acceleration,
+                            acc, (double)out.follower_speed, 800 * DT * acc,
+                            (double)out.base_speed_rad_s / (double)out.follower_speed, rho, worst,
                             worst_k);
                 ++bad;
             }
@@ -886,7 +886,7 @@ static void test_breakaway(void **state)
         fail_msg("breakaway (b): %d of %d configurations", bad, 2 * N_STICK);
 }
 
-/* Steps to the final rest: the first step k such that driven_speed is
+/* Steps to the final rest: the first step k such that follower_speed is
  * exactly 0 at k and at every later step (-1: not at rest at the end). */
 typedef struct {
     int k_rest;
@@ -904,7 +904,7 @@ static rest_result run_to_rest(gs_rig *rig, int n, const gs_rig_input *in)
     r.k_first_zero = -1;
     for (k = 1; k <= n; ++k) {
         gs_rig_step(rig, in, &out);
-        if (is_zero((double)out.driven_speed)) {
+        if (is_zero((double)out.follower_speed)) {
             if (r.k_rest < 0)
                 r.k_rest = k;
             if (r.k_first_zero < 0)
@@ -913,7 +913,7 @@ static rest_result run_to_rest(gs_rig *rig, int n, const gs_rig_input *in)
             r.k_rest = -1;
         }
     }
-    r.w_end = (double)out.driven_speed;
+    r.w_end = (double)out.follower_speed;
     r.wb_end = (double)out.base_speed_rad_s;
     return r;
 }
@@ -995,7 +995,7 @@ static void test_speed_driven_stop(void **state)
         t_hand = J * fabs(wF0) / S_COUL;
         for (k = 1; k <= 500; ++k)
             gs_rig_step(&rig, &run, &out);
-        w_carried = (double)out.driven_speed;
+        w_carried = (double)out.follower_speed;
         r = run_to_rest(&rig, 500, &stop);
         report_rest(lines[ic], sizeof lines[ic], cfg[ic].name, &r, t_hand);
         tol = 0.05 * t_hand + 2.0 * DT;

@@ -113,10 +113,10 @@ OUTPUTS = {  # FMI output (= Python RigResult name) -> gs_rig_output field
     "base_torque": "base_torque_Nm",
     "base_speed": "base_speed_rad_s",
     "base_angle": "base_angle_rad",
-    "driven_speed": "driven_speed",
-    "driven_position": "driven_position",
+    "follower_speed": "follower_speed",
+    "follower_position": "follower_position",
     "base_port_torque": "base_port_torque_Nm",
-    "driven_port_torque": "driven_port_torque",
+    "follower_port_torque": "follower_port_torque",
     "mesh_loss_power": "mesh_loss_power_W",
     "loss_power": "loss_power_W",
     "port_power": "port_power_W",
@@ -124,7 +124,7 @@ OUTPUTS = {  # FMI output (= Python RigResult name) -> gs_rig_output field
     "temperature": "temperature_K",
     "backlash_position": "backlash_position_m",
     "contact_force": "contact_force_N",
-    "driven_acceleration": "driven_acceleration",
+    "follower_acceleration": "follower_acceleration",
 }
 
 _INDEXED = re.compile(r"^([a-z_]+)\[(\d+)(?:,(\d+))?\]$")

@@ -97,7 +97,7 @@ def test_every_parameter_with_c_default_and_unit(model_descriptions, reference, 
     driven = "follower_inertia" if rig == "gear" else "rack_mass"
     assert by_name[driven].unit == ("kg.m2" if rig == "gear" else "kg")
     assert by_name["load"].unit == ("N.m" if rig == "gear" else "N")
-    assert by_name["driven_speed"].unit == ("rad/s" if rig == "gear" else "m/s")
+    assert by_name["follower_speed"].unit == ("rad/s" if rig == "gear" else "m/s")
     assert by_name["dt"].unit == "s" and by_name["dt"].variability == "fixed"
     assert by_name["efficiency_const"].variability == "tunable"
     assert by_name["temperature_vector[1]"].unit == "K"
@@ -303,7 +303,7 @@ def test_simulate_fmu_matches_direct_c_run(unzipped, reference, name):
         assert np.max(diff) <= 1e-12 * scale, f"{out}: max |FMU - C| = {np.max(diff):.3g}"
     MAX_DIFFS[name] = worst
     # the scenario moves: not a trivially zero run
-    assert np.max(np.abs(direct["driven_speed"])) > 0.01
+    assert np.max(np.abs(direct["follower_speed"])) > 0.01
     # outputs at t = 0: initial state
     first = result[0]
     if sc["start"].get("base_drive", 0) == 0:

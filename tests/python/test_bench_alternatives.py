@@ -61,12 +61,12 @@ import gearsim
 BENCH = Path(__file__).resolve().parents[2] / "bench"
 
 # python_loop_full vs gearsim at the benchmark settings: fractions of the peak
-DIRECT = {"base_torque": 3e-2, "driven_speed": 3e-3, "backlash_position": 1e-2}
+DIRECT = {"base_torque": 3e-2, "follower_speed": 3e-3, "backlash_position": 1e-2}
 DIRECT_TEMPERATURE_K = 1e-2
 # the direct difference at 32 sub-steps, as a fraction of the one at 8
 DIRECT_CONVERGENCE = 0.5
 # both vs the reference at the benchmark settings: RMS fractions (gross check)
-COARSE_REF = {"base_torque": 0.25, "driven_speed": 1e-2}
+COARSE_REF = {"base_torque": 0.25, "follower_speed": 1e-2}
 # both vs the reference at 32 sub-steps
 FINE_REF_TORQUE_RMS = 3e-2
 FINE_REF_SPEED_MAX = 5e-3
@@ -210,7 +210,7 @@ def test_full_rig_converges_to_reference(alt, reference_runs, variant):
     problems = []
     for who, run in (("gearsim", gs), ("python_loop_full", py)):
         torque = _rel_rms(run["base_torque"], ref["base_torque"])
-        speed = _rel_max(run["driven_speed"], ref["driven_speed"])
+        speed = _rel_max(run["follower_speed"], ref["follower_speed"])
         temp = float(np.max(np.abs(np.asarray(run["temperature"]) - ref["temperature"])))
         if not torque <= FINE_REF_TORQUE_RMS:
             problems.append(f"{who}: base torque RMS {torque:.2e} > {FINE_REF_TORQUE_RMS}")
@@ -218,7 +218,7 @@ def test_full_rig_converges_to_reference(alt, reference_runs, variant):
             problems.append(f"{who}: follower speed {speed:.2e} of peak > {FINE_REF_SPEED_MAX}")
         if not temp <= FINE_REF_TEMPERATURE_K:
             problems.append(f"{who}: temperature {temp:.2e} K > {FINE_REF_TEMPERATURE_K}")
-    for name in ("base_torque", "driven_speed"):
+    for name in ("base_torque", "follower_speed"):
         at_8 = _rel_max(py8[name], gs8[name])
         at_32 = _rel_max(py[name], gs[name])
         if not at_32 <= DIRECT_CONVERGENCE * at_8:
@@ -256,5 +256,5 @@ def test_backlash_ode_matches_reference(alt, ref_module):
     assert ode["status"] == 0
     x = ref["backlash_position"]
     assert (np.abs(x) > 0.5 * p["linear_backlash"]).any()  # the teeth are in contact
-    diff = _rel_max(ode["driven_speed"], ref["driven_speed"])
+    diff = _rel_max(ode["follower_speed"], ref["follower_speed"])
     assert diff <= ODE_SPEED_MAX, f"follower speed: {diff:.2e} of peak"

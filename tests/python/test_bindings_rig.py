@@ -25,7 +25,7 @@ def test_run_returns_named_arrays():
     assert set(out.to_dict()) == set(gearsim.OUTPUT_NAMES) == set(out.keys())
     assert out.as_array().shape == (100, 15)
     # kinematics of the rigid gear (opposite rotation, ratio 3)
-    np.testing.assert_allclose(out.driven_speed, -out.base_speed / 3.0, rtol=1e-12)
+    np.testing.assert_allclose(out.follower_speed, -out.base_speed / 3.0, rtol=1e-12)
 
 
 def test_output_names_are_the_documented_ones():
@@ -33,10 +33,10 @@ def test_output_names_are_the_documented_ones():
         "base_torque",
         "base_speed",
         "base_angle",
-        "driven_speed",
-        "driven_position",
+        "follower_speed",
+        "follower_position",
         "base_port_torque",
-        "driven_port_torque",
+        "follower_port_torque",
         "mesh_loss_power",
         "loss_power",
         "port_power",
@@ -44,7 +44,7 @@ def test_output_names_are_the_documented_ones():
         "temperature",
         "backlash_position",
         "contact_force",
-        "driven_acceleration",
+        "follower_acceleration",
     )
     assert gearsim.INPUT_NAMES == (
         "base_speed",
@@ -411,4 +411,4 @@ def test_backlash_options_keep_the_settled_torques(
         rig = model.rig(dt=1e-3)
         out = rig.run(base_speed=np.full(3000, speed), load=np.full(3000, 0.7))
         assert out.base_torque[-1] == pytest.approx(expected, rel=1e-9)
-        assert out.driven_speed[-1] == pytest.approx(-speed / 2.0, rel=1e-12)
+        assert out.follower_speed[-1] == pytest.approx(-speed / 2.0, rel=1e-12)

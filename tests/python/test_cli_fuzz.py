@@ -193,9 +193,9 @@ def _log_messages() -> list[Any]:
             "out.base_torque": 0.2 + 0.01 * w - load / 3.0,
             "out.base_speed": w,
             "in.load": load,
-            "out.driven_speed": -w / 3.0,
-            "out.driven_angle": 0.0,
-            "out.driven_acceleration": 0.0,
+            "out.follower_speed": -w / 3.0,
+            "out.follower_angle": 0.0,
+            "out.follower_acceleration": 0.0,
         }
         for name in ("GearFbBase", "GearFbFollower"):
             f = frames[name]

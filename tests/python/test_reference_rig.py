@@ -61,7 +61,7 @@ Tolerances and why (measured worst over the cases in brackets):
 - Speeds (end-of-step values): max |C - ref| <= SPEED_MAX = 5e-3 of the peak
   [3.0e-3]. The C rig's contact is backward Euler, first order in h; speed
   errors are integrals of the force error.
-- Torques (step means of base_port_torque, driven_port_torque and, speed-
+- Torques (step means of base_port_torque, follower_port_torque and, speed-
   driven, base_torque), over the steps where the teeth neither meet nor part
   (and the steps next to those): max |C - ref| <= TORQUE_MAX = 3e-2 of the
   peak [1.6e-2]. At the steps where the teeth meet or part the step mean
@@ -288,7 +288,7 @@ def _rel_rms(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sqrt(np.mean((np.asarray(a) - b) ** 2)) / np.sqrt(np.mean(b**2)))
 
 
-TORQUES = ("base_port_torque", "driven_port_torque")
+TORQUES = ("base_port_torque", "follower_port_torque")
 
 
 def compare(case: Case) -> dict[str, Any]:
@@ -305,18 +305,18 @@ def compare(case: Case) -> dict[str, Any]:
     out = ref.run(**kw)
     fine = c_run(case, SUBSTEPS, kw)
     coarse = c_run(case, SUBSTEPS_COARSE, kw)
-    n = len(out["driven_speed"])
+    n = len(out["follower_speed"])
     # steps where the teeth meet or part, with one step either side
     changes = out["contact_changes"] > 0
     near = changes | np.roll(changes, 1) | np.roll(changes, -1)
     res: dict[str, Any] = {"ref": out, "c": fine, "kw": kw, "n": n, "impact_steps": int(near.sum())}
-    speeds = ("driven_speed",) + (("base_speed",) if case.drive == "torque" else ())
+    speeds = ("follower_speed",) + (("base_speed",) if case.drive == "torque" else ())
     for name in speeds:
         res[f"max {name}"] = _rel_max(fine[name], out[name])
     for name in TORQUES:
         res[f"max {name}"] = _rel_max(fine[name], out[name], ~near)
         res[f"max {name} (all steps)"] = _rel_max(fine[name], out[name])
-    for name in (*TORQUES, "driven_speed"):
+    for name in (*TORQUES, "follower_speed"):
         res[f"rms {name}"] = _rel_rms(fine[name], out[name])
         res[f"rms {name} coarse"] = _rel_rms(coarse[name], out[name])
     if case.drive == "speed":
@@ -334,9 +334,9 @@ def compare(case: Case) -> dict[str, Any]:
             rigid = ref.rigid_speed_driven(kw["base_speed"][k], kw["load"][k], temperature)
         else:
             rigid = ref.rigid_torque_driven(
-                kw["base_torque"][k], kw["load"][k], out["driven_speed"][k], temperature
+                kw["base_torque"][k], kw["load"][k], out["follower_speed"][k], temperature
             )
-        row = {"t": ts, "driven_speed": float(out["driven_speed"][k])}
+        row = {"t": ts, "follower_speed": float(out["follower_speed"][k])}
         for name in TORQUES:
             peak = float(np.max(np.abs(out[name])))
             row[f"C-ref {name}"] = abs(fine[name][k] - out[name][k]) / peak
@@ -350,8 +350,8 @@ def compare(case: Case) -> dict[str, Any]:
     res["flanks"] = bool((x > half_gap).any() and (x < -half_gap).any())
     res["free play"] = bool((np.abs(x) < half_gap).any())
     f = out["contact_force"]
-    t_f = out["driven_port_torque"] - ref.mu_f * out["driven_speed"]
-    p = (t_f * out["driven_speed"])[np.abs(f) > 0.05 * np.max(np.abs(f))]
+    t_f = out["follower_port_torque"] - ref.mu_f * out["follower_speed"]
+    p = (t_f * out["follower_speed"])[np.abs(f) > 0.05 * np.max(np.abs(f))]
     res["power both ways"] = bool((p > 0).any() and (p < 0).any())
     return res
 
@@ -366,9 +366,9 @@ def test_c_rig_matches_reference(case: Case) -> None:
 
     for row in res["settled"]:
         if case.block == "simple_gear":
-            assert abs(row["driven_speed"]) > 0.5, row  # far from the smoothing thresholds
+            assert abs(row["follower_speed"]) > 0.5, row  # far from the smoothing thresholds
         else:
-            assert abs(row["driven_speed"]) > 0.05, row
+            assert abs(row["follower_speed"]) > 0.05, row
         limit = SETTLED_THERMAL_RTOL if case.thermal_state else SETTLED_RTOL
         for key, value in row.items():
             if key.startswith(("C-ref", "ref-rigid")) and not value <= limit:
@@ -387,7 +387,7 @@ def test_c_rig_matches_reference(case: Case) -> None:
             continue
         if not value <= limit:
             problems.append(f"{key}: {value:.2e} > {limit}")
-    for name in (*TORQUES, "driven_speed"):
+    for name in (*TORQUES, "follower_speed"):
         fine, coarse = res[f"rms {name}"], res[f"rms {name} coarse"]
         if not fine <= CONVERGENCE * coarse:
             problems.append(

@@ -9,7 +9,7 @@ runs and errors as exceptions. See docs/python.md and docs/python-api.md.
     model = gearsim.Model.load("model.toml")
     rig = model.rig(dt=1e-3)
     out = rig.run(base_speed=w, load=tau_load)
-    out.base_torque, out.driven_speed, out.temperature
+    out.base_torque, out.follower_speed, out.temperature
 """
 
 from __future__ import annotations

@@ -36,10 +36,10 @@ _OUTPUT_FIELDS = {
     "base_torque": "base_torque_Nm",
     "base_speed": "base_speed_rad_s",
     "base_angle": "base_angle_rad",
-    "driven_speed": "driven_speed",
-    "driven_position": "driven_position",
+    "follower_speed": "follower_speed",
+    "follower_position": "follower_position",
     "base_port_torque": "base_port_torque_Nm",
-    "driven_port_torque": "driven_port_torque",
+    "follower_port_torque": "follower_port_torque",
     "mesh_loss_power": "mesh_loss_power_W",
     "loss_power": "loss_power_W",
     "port_power": "port_power_W",
@@ -47,7 +47,7 @@ _OUTPUT_FIELDS = {
     "temperature": "temperature_K",
     "backlash_position": "backlash_position_m",
     "contact_force": "contact_force_N",
-    "driven_acceleration": "driven_acceleration",
+    "follower_acceleration": "follower_acceleration",
 }
 _IN_COL = {name: INPUT_COLUMNS[c] for name, c in _INPUT_FIELDS.items()}
 _OUT_COL = {name: OUTPUT_COLUMNS[c] for name, c in _OUTPUT_FIELDS.items()}
@@ -66,10 +66,10 @@ _OUTPUT_DOCS = {
     "base_torque": "torque the drive applies to the base shaft (N*m)",
     "base_speed": "base (pinion) shaft speed (rad/s)",
     "base_angle": "base (pinion) shaft angle (rad)",
-    "driven_speed": "follower speed (rad/s) or rack velocity (m/s)",
-    "driven_position": "follower angle (rad) or rack position (m)",
+    "follower_speed": "follower speed (rad/s) or rack velocity (m/s)",
+    "follower_position": "follower angle (rad) or rack position (m)",
     "base_port_torque": "tau_B, what the base shaft applies to the block (N*m)",
-    "driven_port_torque": "tau_F (N*m) or F_R (N), what the driven side applies to the block",
+    "follower_port_torque": "tau_F (N*m) or F_R (N), what the driven side applies to the block",
     "mesh_loss_power": "meshing loss (W, >= 0)",
     "loss_power": "mesh + viscous + contact damping loss (W, >= 0)",
     "port_power": "power into the block through both ports (W)",
@@ -77,7 +77,7 @@ _OUTPUT_DOCS = {
     "temperature": "block temperature at the end of the step, or the measured input (K)",
     "backlash_position": "backlash position x (m)",
     "contact_force": "backlash contact force (N)",
-    "driven_acceleration": "follower (rad/s^2) or rack (m/s^2) acceleration",
+    "follower_acceleration": "follower (rad/s^2) or rack (m/s^2) acceleration",
 }
 
 

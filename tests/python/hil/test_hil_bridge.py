@@ -38,7 +38,7 @@ def _check_against_reference(
         for _ in range(bridge.substeps):
             res = ref.step(load=held["cmd.load"], **{drive: held[f"cmd.{drive}"]})
         expected = {f"out.{f}": getattr(res, f) for f in res.keys()}
-        expected["out.driven_angle"] = wrap_angle(res.driven_position)
+        expected["out.follower_angle"] = wrap_angle(res.follower_position)
         expected["in.load"] = held["cmd.load"]
         for msg in peer.drain():
             seen[msg.arbitration_id] = seen.get(msg.arbitration_id, 0) + 1
@@ -51,7 +51,7 @@ def _check_against_reference(
                 want = expected[role]
                 tol = abs(s.scale) / 2 + 1e-9
                 got = values[role]
-                if role == "out.driven_angle":
+                if role == "out.follower_angle":
                     diff = abs(got - want)
                     diff = min(diff, 2 * math.pi - diff)
                     assert diff <= tol, (k, fb.name, s.name, got, want)
@@ -281,7 +281,7 @@ def test_saturated_feedback_is_clamped_and_flagged(channel: str, gear_dbc: RigDb
                 peer.command(base_speed=1000.0)
             bridge.tick()
         msgs = peer.drain()
-        follower = [v["out.driven_speed"] for n, v in peer.decoded(msgs) if n == "GearFbFollower"]
+        follower = [v["out.follower_speed"] for n, v in peer.decoded(msgs) if n == "GearFbFollower"]
         assert follower[-1] == pytest.approx(
             -8388.608
         )  # opposite rotation; clamped at the DBC maximum, not wrapped

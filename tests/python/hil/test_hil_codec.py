@@ -35,7 +35,7 @@ def test_shipped_dbc_layout(
     for role in (
         "out.base_torque",
         "out.base_speed",
-        "out.driven_speed",
+        "out.follower_speed",
         "out.temperature",
         "out.loss_power",
         "out.backlash_position",
@@ -48,7 +48,7 @@ def test_shipped_dbc_layout(
         "status.count.rx_ignored",
     ):
         assert dbc.feedback_signals(role), role
-    position = "out.driven_angle" if rig == "gear" else "out.driven_position"
+    position = "out.follower_angle" if rig == "gear" else "out.follower_position"
     assert dbc.feedback_signals(position)
     # status frames are encoded after the data frames of the same period
     assert [f.is_status for f in dbc.feedback] == sorted(f.is_status for f in dbc.feedback)

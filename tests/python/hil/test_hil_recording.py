@@ -57,7 +57,7 @@ def test_gear_log_to_csv(tmp_path: Path, gear_dbc: RigDbc) -> None:
     assert np.diff(data[:, 0]) == pytest.approx(np.full(59, 0.01))
     assert data[0, 0] == pytest.approx(0.01) and data[-1, 0] == pytest.approx(0.6)
     # each row holds the feedback of that instant (the log's first frame is at t = 0)
-    roles = ("out.base_speed", "in.load", "out.base_torque", "out.driven_speed")
+    roles = ("out.base_speed", "in.load", "out.base_torque", "out.follower_speed")
     for col, role in enumerate(roles, start=1):
         want = _series(gear_dbc, live, role)
         assert data[:, col].tolist() == [want[round(t, 9)] for t in data[:, 0]], role

@@ -146,13 +146,13 @@ def build_context(
         for o in spec.outputs
     }
     sig = sim.signals
-    v = sig.get("driven_speed", sim.outputs[spec.speed_output])
+    v = sig.get("follower_speed", sim.outputs[spec.speed_output])
     if mk.block_values(model).get("backlash_enabled", False):
         v = inputs.base_speed * kin  # rigid kinematics: the signatures describe the mesh motion
-    a = sig.get("driven_acceleration")
+    a = sig.get("follower_acceleration")
     if a is None:
         a = np.gradient(v, meas.dt)
-    tau_f = sig.get("driven_port_torque")
+    tau_f = sig.get("follower_port_torque")
     mu_f = mk.viscous_value(model)
     if tau_f is None:
         tau_f = -sim.outputs[spec.torque_output] / kin

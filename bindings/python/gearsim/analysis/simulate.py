@@ -88,8 +88,8 @@ class Simulation:
     """Simulated outputs (canonical output names) plus the rig's other signals.
 
     outputs: {torque output: base torque (N*m), speed output: driven speed}.
-    signals: the RigResult arrays by name (driven_speed, driven_port_torque,
-    driven_acceleration, temperature, mesh_loss_power, ...)."""
+    signals: the RigResult arrays by name (follower_speed, follower_port_torque,
+    follower_acceleration, temperature, mesh_loss_power, ...)."""
 
     outputs: dict[str, np.ndarray]
     signals: dict[str, np.ndarray]
@@ -97,16 +97,16 @@ class Simulation:
 
 _SIGNALS = (
     "base_torque",
-    "driven_speed",
-    "driven_port_torque",
-    "driven_acceleration",
+    "follower_speed",
+    "follower_port_torque",
+    "follower_acceleration",
     "temperature",
     "mesh_loss_power",
     "loss_power",
     "base_speed",
     "backlash_position",
     "contact_force",
-    "driven_position",
+    "follower_position",
 )
 
 
@@ -124,7 +124,7 @@ def _run(model: Any, meas: Measurement, inputs: Inputs) -> tuple[Any, dict[str, 
     spec = meas.spec
     return res, {
         spec.torque_output: np.asarray(res.base_torque, dtype=float),
-        spec.speed_output: np.asarray(res.driven_speed, dtype=float),
+        spec.speed_output: np.asarray(res.follower_speed, dtype=float),
     }
 
 

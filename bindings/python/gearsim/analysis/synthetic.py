@@ -160,7 +160,7 @@ def synthesize(
         spec.load_input: noisy(exc.load),
         spec.torque_output: noisy(np.asarray(out.base_torque), offset=sensors.torque_offset),
         spec.speed_output: noisy(
-            np.asarray(out.driven_speed), sensors.speed_resolution, noise=sensors.speed_noise
+            np.asarray(out.follower_speed), sensors.speed_resolution, noise=sensors.speed_noise
         ),
     }
     if use_t:

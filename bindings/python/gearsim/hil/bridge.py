@@ -218,9 +218,9 @@ class Bridge:
             for s in f.signals
             if s.role and s.role.startswith("out.")
         }
-        if "driven_angle" in names:
-            names.discard("driven_angle")
-            names.add("driven_position")
+        if "follower_angle" in names:
+            names.discard("follower_angle")
+            names.add("follower_position")
         if getattr(rig, "temperature_input", False):
             raise BridgeError(
                 "the bridge steps rigs built with temperature_input=False", parameter="rig"
@@ -534,8 +534,8 @@ class Bridge:
                 continue
             group, _, name = role.partition(".")
             if group == "out":
-                if name == "driven_angle":
-                    values[role] = math.fmod(out["driven_position"], _TWO_PI) % _TWO_PI
+                if name == "follower_angle":
+                    values[role] = math.fmod(out["follower_position"], _TWO_PI) % _TWO_PI
                 else:
                     values[role] = out[name]
             elif group == "in":

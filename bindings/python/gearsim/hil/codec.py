@@ -8,8 +8,8 @@ real rig can be used once its signals are tagged:
 
 - ``cmd.base_speed``, ``cmd.base_torque``, ``cmd.load``, ``cmd.mode``: command
   signals (frames holding them are command frames);
-- ``out.<RigResult field>`` (``out.base_torque``, ``out.driven_speed``, ...) and
-  ``out.driven_angle`` (the follower angle modulo 2*pi, in [0, 2*pi));
+- ``out.<RigResult field>`` (``out.base_torque``, ``out.follower_speed``, ...) and
+  ``out.follower_angle`` (the follower angle modulo 2*pi, in [0, 2*pi));
 - ``in.base_speed``, ``in.base_torque``, ``in.load``: the inputs the rig applied
   during the last frame period (after the safe-state logic);
 - ``status.counter`` (rolling), ``status.flag.<flag>``, ``status.count.<counter>``.
@@ -62,8 +62,8 @@ INPUT_ROLES: tuple[str, ...] = ("in.base_speed", "in.base_torque", "in.load")
 #: RigResult fields (docs/python-api.md), usable as ``out.<field>``: the rig's
 #: own list, so that the two cannot drift apart.
 OUTPUT_FIELDS: tuple[str, ...] = OUTPUT_NAMES
-#: out.driven_angle: driven_position modulo 2*pi, in [0, 2*pi) (gear rig).
-DERIVED_OUTPUTS: tuple[str, ...] = ("driven_angle",)
+#: out.follower_angle: follower_position modulo 2*pi, in [0, 2*pi) (gear rig).
+DERIVED_OUTPUTS: tuple[str, ...] = ("follower_angle",)
 #: Status flags. The first three are the state during the frame period that
 #: ended with the status frame; the others are latched: set when the event
 #: happened at least once since the previous status frame of the same ID.

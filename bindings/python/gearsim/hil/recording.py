@@ -6,7 +6,7 @@ Columns: ``time, base_speed, load_torque, base_torque, follower_speed`` (gear
 rig) or ``time, pinion_speed, load_force, pinion_torque, rack_velocity`` (rack
 rig), plus ``temperature`` on request. Where each comes from (DBC roles):
 
-- outputs: ``out.base_torque`` and ``out.driven_speed`` (feedback);
+- outputs: ``out.base_torque`` and ``out.follower_speed`` (feedback);
 - speed input: the measured ``out.base_speed`` (feedback) or the command
   ``cmd.base_speed``; load input: the applied ``in.load`` (feedback) or the
   command ``cmd.load``. ``source="auto"`` takes the feedback signal when the
@@ -167,7 +167,7 @@ def log_to_measurement(
         names[0]: speed_role,
         names[1]: load_role,
         names[2]: "out.base_torque",
-        names[3]: "out.driven_speed",
+        names[3]: "out.follower_speed",
     }
     if temperature:
         roles["temperature"] = "out.temperature"
