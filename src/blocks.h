@@ -4,6 +4,7 @@
 
 #include "gearsim/simple_gear.h"
 #include "gearsim/rack_pinion.h"
+#include "mesh.h"
 
 /* Validate params and fill a mesh (constants + initial state). The mesh is
  * written only on success. */

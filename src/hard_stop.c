@@ -303,7 +303,7 @@ static gs_real law_force(const gs_mesh_ *m, gs_real delta, gs_real v)
 }
 
 static gs_real solve_no_pull(const gs_mesh_ *m, const gs_contact_step_ *cs, gs_real x, gs_real u_free,
-                             gs_real *force, gs_real *f_spring)
+                             gs_real last_force, gs_real *force, gs_real *f_spring)
 {
     const gs_real x_free = x + cs->h * u_free;
     gs_real side;
@@ -324,7 +324,7 @@ static gs_real solve_no_pull(const gs_mesh_ *m, const gs_contact_step_ *cs, gs_r
     int on_edge = 0; /* the root is the stop's edge, on a jump of a full law */
     if (m->hard_stop == GS_HARD_STOP_SMOOTH) {
         /* start from the last sub-step's force: it changes little between sub-steps */
-        v = smooth_root(m, &q, q.v_free - cs->c * side * m->contact_force);
+        v = smooth_root(m, &q, q.v_free - cs->c * side * last_force);
     } else {
         v = full_root(m, &q, &on_edge);
     }
@@ -415,10 +415,10 @@ static gs_real solve_bracketed(const gs_mesh_ *m, const gs_contact_step_ *cs, gs
     return u;
 }
 
-gs_real gs_contact_solve(gs_mesh_ *m, const gs_contact_step_ *cs, gs_real x, gs_real u_free,
-                         gs_real *force, gs_real *f_spring)
+gs_real gs_contact_solve(const gs_mesh_ *m, gs_block_state *st, const gs_contact_step_ *cs, gs_real x,
+                         gs_real u_free, gs_real *force, gs_real *f_spring)
 {
-    if (m->lock_enabled && m->locked) {
+    if (m->lock_enabled && st->contact_locked) {
         const gs_real required = u_free * cs->inv_c;
         if (lock_holds(m, x, required)) {
             gs_real dfdu;
@@ -426,16 +426,16 @@ gs_real gs_contact_solve(gs_mesh_ *m, const gs_contact_step_ *cs, gs_real x, gs_
             *force = required;
             return GS_R(0.0);
         }
-        m->locked = 0;
+        st->contact_locked = 0;
     }
-    const gs_real u = m->no_pull ? solve_no_pull(m, cs, x, u_free, force, f_spring)
+    const gs_real u = m->no_pull ? solve_no_pull(m, cs, x, u_free, st->contact_force, force, f_spring)
                                  : solve_bracketed(m, cs, x, u_free, force, f_spring);
     /* Lock a slow impact: at or beyond the stop, closing or stopped (u has
      * the sign of the side, or is zero), never while the teeth separate. */
     const gs_real x_end = x + cs->h * u;
     if (m->lock_enabled && gs_abs(x_end) >= m->half_gap && gs_abs(u) < m->lock_speed &&
         x_end * u >= GS_R(0.0)) {
-        m->locked = 1;
+        st->contact_locked = 1;
     }
     return u;
 }

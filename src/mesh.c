@@ -9,7 +9,6 @@ gs_status gs_mesh_set_backlash(gs_mesh_ *m, const gs_backlash_params *p, gs_real
     m->backlash = p->enabled ? 1 : 0;
     m->base_radius = base_radius;
     m->follower_radius = follower_radius;
-    m->locked = 0;
     if (!m->backlash) {
         return GS_OK;
     }
@@ -86,47 +85,39 @@ gs_status gs_mesh_set_thermal(gs_mesh_ *m, gs_real thermal_mass, gs_real initial
 void gs_mesh_set_temperature_table(gs_mesh_ *m, const gs_real *temperature, const gs_real *eta,
                                    int n)
 {
-    m->eta_of_T.n = n;
+    m->table.eta_of_T.n = n;
     for (int i = 0; i < n; ++i) {
-        m->eta_of_T.x[i] = temperature[i];
-        m->eta_of_T.y[i] = eta[i];
+        m->table.eta_of_T.x[i] = temperature[i];
+        m->table.eta_of_T.y[i] = eta[i];
     }
 }
 
-void gs_mesh_reset(gs_mesh_ *m)
+void gs_mesh_reset(const gs_mesh_ *m, gs_block_state *st)
 {
-    m->temperature = m->initial_temperature;
-    m->position = m->backlash ? m->initial_position : GS_R(0.0);
-    m->contact_force = GS_R(0.0);
-    m->last_follower_torque = GS_R(0.0);
-    m->locked = 0;
+    st->temperature = m->initial_temperature;
+    st->backlash_position = m->backlash ? m->initial_position : GS_R(0.0);
+    st->contact_force = GS_R(0.0);
+    st->follower_torque = GS_R(0.0);
+    st->contact_locked = 0;
 }
 
-void gs_mesh_copy_state(gs_mesh_ *to, const gs_mesh_ *from)
-{
-    to->temperature = from->temperature;
-    to->position = from->position;
-    to->contact_force = from->contact_force;
-    to->last_follower_torque = from->last_follower_torque;
-    to->locked = from->locked;
-}
-
-void gs_mesh_thermal_step(gs_mesh_ *m, gs_real dt, gs_real loss_W, gs_real q_W,
-                          gs_real ambient_K, gs_real conductance_W_K)
+void gs_mesh_thermal_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, gs_real loss_W,
+                          gs_real q_W, gs_real ambient_K, gs_real conductance_W_K)
 {
     if (!m->thermal_enabled) {
         return;
     }
     /* C dT/dt = P + q + G (T_amb - T): the ambient term implicit, the rest explicit. */
     const gs_real a = dt / m->thermal_mass;
-    m->temperature = (m->temperature + a * (loss_W + q_W + conductance_W_K * ambient_K))
+    st->temperature = (st->temperature + a * (loss_W + q_W + conductance_W_K * ambient_K))
                      / (GS_R(1.0) + a * conductance_W_K);
 }
 
-void gs_mesh_block_step(gs_mesh_ *m, gs_real dt, const gs_mesh_in_ *in, gs_mesh_out_ *out)
+void gs_mesh_block_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, const gs_mesh_in_ *in,
+                        gs_mesh_out_ *out)
 {
     gs_loss_ctx_ ctx;
-    const gs_real temperature = in->use_temperature ? in->temperature : m->temperature;
+    const gs_real temperature = in->use_temperature ? in->temperature : st->temperature;
     gs_mesh_loss_prepare(m, temperature, &ctx);
     const gs_real w_b = in->base_speed;
     gs_real w_f, tau_b, tau_f, tau_mesh, f = GS_R(0.0), f_spring = GS_R(0.0), u = GS_R(0.0);
@@ -141,22 +132,22 @@ void gs_mesh_block_step(gs_mesh_ *m, gs_real dt, const gs_mesh_in_ *in, gs_mesh_
         /* form C: both speeds in, torques from the contact (4.6) */
         w_f = in->follower_speed;
         u = m->base_radius * w_b - m->direction * m->follower_radius * w_f;
-        f = gs_contact_force(m, m->position, u, &f_spring);
+        f = gs_contact_force(m, st->backlash_position, u, &f_spring);
         const gs_real t_f0 = -m->direction * m->follower_radius * f;
-        tau_mesh = gs_mesh_loss_from_tooth(m, &ctx, t_f0, w_f, m->last_follower_torque);
-        m->last_follower_torque = t_f0 + tau_mesh;
+        tau_mesh = gs_mesh_loss_from_tooth(m, &ctx, t_f0, w_f, st->follower_torque);
+        st->follower_torque = t_f0 + tau_mesh;
         tau_b = m->base_radius * f + m->mu_base * w_b;
         tau_f = t_f0 + tau_mesh + m->mu_follower * w_f;
-        m->position += dt * u;
-        m->contact_force = f;
+        st->backlash_position += dt * u;
+        st->contact_force = f;
     }
     const gs_real p_mesh = tau_mesh * w_f;
     const gs_real p_loss = p_mesh + m->mu_base * w_b * w_b + m->mu_follower * w_f * w_f
                            + (f - f_spring) * u;
     if (in->use_temperature) {
-        m->temperature = in->temperature;
+        st->temperature = in->temperature;
     } else {
-        gs_mesh_thermal_step(m, dt, p_loss, in->heat_flow, GS_R(0.0), GS_R(0.0));
+        gs_mesh_thermal_step(m, st, dt, p_loss, in->heat_flow, GS_R(0.0), GS_R(0.0));
     }
     out->base_torque = tau_b;
     out->follower_torque = tau_f;
@@ -164,7 +155,7 @@ void gs_mesh_block_step(gs_mesh_ *m, gs_real dt, const gs_mesh_in_ *in, gs_mesh_
     out->loss_torque = tau_mesh;
     out->mesh_loss_power = p_mesh;
     out->loss_power = p_loss;
-    out->temperature = m->temperature;
-    out->position = m->position;
+    out->temperature = st->temperature;
+    out->position = st->backlash_position;
     out->contact_force = f;
 }

@@ -9,6 +9,84 @@
 
 #include "gearsim/types.h"
 
+/* ---- Internal constants: what init derives and the step only reads. The
+ * state lives in the public gs_block_state. Plain data, no pointers. */
+typedef struct {
+    gs_real x[GS_TABLE_MAX];
+    gs_real y[GS_TABLE_MAX];
+    int n;
+} gs_table1_;
+
+typedef struct {
+    gs_real x[GS_TABLE_MAX];       /* rows: temperature, K */
+    gs_real y[GS_TABLE_MAX];       /* columns: base load, N*m */
+    gs_real z[GS_TABLE_MAX][GS_TABLE_MAX];
+    int nx;
+    int ny;
+} gs_table2_;
+
+/* The mesh shared by both blocks: omega_B = ratio * omega_F, where ratio =
+ * s*g (Simple Gear) or s_R/r_P (Rack & Pinion, follower = rack). */
+typedef struct {
+    gs_real ratio;              /* omega_B / omega_F (signed) */
+    gs_real inv_ratio;          /* omega_F / omega_B */
+    gs_real base_radius;        /* r_B or r_P, m (backlash geometry) */
+    gs_real follower_radius;    /* r_F (m) or 1 for the rack */
+    gs_real direction;          /* s or s_R, +1 or -1 */
+    gs_real mu_base;            /* viscous, N*m/(rad/s) */
+    gs_real mu_follower;        /* viscous, N*m/(rad/s) or N/(m/s) */
+    gs_friction_model friction;
+    gs_loss_smoothing smoothing;
+    gs_real eta;                /* constant efficiency */
+    gs_real power_threshold;    /* W */
+    gs_real inv_power_threshold;
+    gs_real coulomb_idle;       /* g*tau_idle, follower-referred, N*m */
+    gs_real load_slope;         /* k of eq. 2.5 */
+    gs_real inv_speed_threshold;/* 1/omega_th */
+    gs_real base_load_scale;    /* |T_F| -> base load: 1/g */
+    int thermal_enabled;
+    gs_real thermal_mass;       /* J/K */
+    gs_real initial_temperature;/* K */
+    /* backlash */
+    int backlash;
+    gs_hard_stop_model hard_stop;
+    gs_real half_gap;           /* b/2, m */
+    gs_real inv_transition;     /* 1/d */
+    gs_real stiffness;
+    gs_real damping;
+    gs_real initial_position;
+    int no_pull;
+    int lock_enabled;
+    gs_real lock_speed;
+    gs_real lock_release_force;
+    /* The efficiency table of the friction model in use: only one law is
+     * active, so the tables share their storage. */
+    union {
+        gs_table1_ eta_of_T;        /* temperature-dependent efficiency */
+        gs_table2_ eta_of_T_load;   /* temperature- and load-dependent efficiency */
+    } table;
+} gs_mesh_;
+
+/* Constants of the backward-Euler contact for one sub-step length
+ * (src/hard_stop.c), computed at init so that the step path divides little. */
+typedef struct {
+    gs_real h;                   /* sub-step, s */
+    gs_real inv_h;               /* 1/h, 1/s */
+    gs_real c;                   /* h/m_eff, s/kg */
+    gs_real inv_c;               /* m_eff/h, kg/s */
+    gs_real c_stiffness;         /* c*K, 1/s */
+    gs_real inv_affine_damped;   /* 1/(1 + c*(K*h + D)) */
+    gs_real inv_affine_undamped; /* 1/(1 + c*K*h) */
+    gs_real draw_dv;             /* K*h + D: d(K*delta + D*v)/dv, N*s/m */
+    gs_real dxi_dv;              /* h/d: d(delta/d)/dv for the smooth law, s/m */
+    gs_real transition;          /* d, m (smooth law) */
+    int law_force_conditioned;   /* kappa = c*(K*h + D) < 1: the law may give the root's force */
+} gs_contact_step_;
+
+/* The public opaque blocks are views of these internal types: a compile-time
+ * check that the published sizes are exact (C99: a negative array size). */
+#define GS_STATIC_ASSERT_(name, cond) typedef char gs_static_assert_##name[(cond) ? 1 : -1]
+
 /* Mesh-loss quantities that depend only on the temperature, evaluated once
  * per step. */
 typedef struct {
@@ -22,9 +100,8 @@ gs_status gs_mesh_set_backlash(gs_mesh_ *m, const gs_backlash_params *p, gs_real
                                gs_real follower_radius, gs_error *err);
 gs_status gs_mesh_set_thermal(gs_mesh_ *m, gs_real thermal_mass, gs_real initial_temperature,
                               gs_error *err);
-void gs_mesh_reset(gs_mesh_ *m);
-/* Copies the state fields (those gs_mesh_reset sets) from one mesh to another. */
-void gs_mesh_copy_state(gs_mesh_ *to, const gs_mesh_ *from);
+/* The initial state of a mesh. */
+void gs_mesh_reset(const gs_mesh_ *m, gs_block_state *st);
 /* Copies a validated temperature -> efficiency table into the mesh. */
 void gs_mesh_set_temperature_table(gs_mesh_ *m, const gs_real *temperature, const gs_real *eta,
                                    int n);
@@ -54,13 +131,13 @@ void gs_contact_prepare(const gs_mesh_ *m, gs_real h, gs_real inv_mass, gs_conta
 /* Backward-Euler contact over one sub-step cs->h: finds u with
  * u = u_free - cs->c*f(x + h*u, u); returns u, the force and its spring part.
  * Handles the static-contact lock when enabled. Bounded cost. */
-gs_real gs_contact_solve(gs_mesh_ *m, const gs_contact_step_ *cs, gs_real x, gs_real u_free,
-                         gs_real *force, gs_real *f_spring);
+gs_real gs_contact_solve(const gs_mesh_ *m, gs_block_state *st, const gs_contact_step_ *cs, gs_real x,
+                         gs_real u_free, gs_real *force, gs_real *f_spring);
 
 /* Thermal mass: explicit heat flow q_W, or an ambient path through
  * conductance g_W_K treated implicitly (stable for any thermal mass). */
-void gs_mesh_thermal_step(gs_mesh_ *m, gs_real dt, gs_real loss_W, gs_real q_W,
-                          gs_real ambient_K, gs_real conductance_W_K);
+void gs_mesh_thermal_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, gs_real loss_W,
+                          gs_real q_W, gs_real ambient_K, gs_real conductance_W_K);
 
 /* Block-level step shared by both blocks: rigid (form A) or backlash (form C). */
 typedef struct {
@@ -71,6 +148,7 @@ typedef struct {
     gs_real base_torque, follower_torque, follower_speed, loss_torque, mesh_loss_power,
         loss_power, temperature, position, contact_force;
 } gs_mesh_out_;
-void gs_mesh_block_step(gs_mesh_ *m, gs_real dt, const gs_mesh_in_ *in, gs_mesh_out_ *out);
+void gs_mesh_block_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, const gs_mesh_in_ *in,
+                        gs_mesh_out_ *out);
 
 #endif /* GS_MESH_H */

@@ -15,12 +15,12 @@ void gs_mesh_loss_prepare(const gs_mesh_ *m, gs_real temperature, gs_loss_ctx_ *
     gs_real eta = m->eta;
     switch (m->friction) {
     case GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY:
-        eta = gs_interp1(m->eta_of_T.x, m->eta_of_T.y, m->eta_of_T.n, temperature);
+        eta = gs_interp1(m->table.eta_of_T.x, m->table.eta_of_T.y, m->table.eta_of_T.n, temperature);
         break;
     case GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY: {
         /* Bilinear = linear in temperature per load column, then in load. The
          * temperature bracket and weight are found once for all columns. */
-        const gs_table2_ *t = &m->eta_of_T_load;
+        const gs_table2_ *t = &m->table.eta_of_T_load;
         int lo = 0;
         int hi = 0;
         gs_real w = GS_R(0.0);
@@ -67,7 +67,7 @@ static gs_real coulomb_slope(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real
         return m->load_slope;
     }
     const gs_real load = gs_abs(T) * m->base_load_scale;
-    const gs_real eta = gs_interp1(m->eta_of_T_load.y, ctx->eta_of_load, m->eta_of_T_load.ny, load);
+    const gs_real eta = gs_interp1(m->table.eta_of_T_load.y, ctx->eta_of_load, m->table.eta_of_T_load.ny, load);
     return GS_R(1.0) / eta - GS_R(1.0);
 }
 

@@ -131,32 +131,45 @@ gs_status gs_rack_pinion_mesh(gs_mesh_ *mesh, const gs_rack_pinion_params *p, gs
         (s = gs_mesh_set_backlash(&m, &p->backlash, radius, GS_R(1.0), err)) != GS_OK) {
         return s;
     }
-    gs_mesh_reset(&m);
     *mesh = m;
     gs_error_clear(err);
     return GS_OK;
 }
 
-gs_status gs_rack_pinion_init(gs_rack_pinion *rp, const gs_rack_pinion_params *params, gs_error *err)
+GS_STATIC_ASSERT_(rack_pinion_consts_size, sizeof(gs_rack_pinion_consts) == sizeof(gs_mesh_));
+
+/* The opaque public block is a view of the internal constants. */
+static const gs_mesh_ *consts_mesh(const gs_rack_pinion_consts *consts)
 {
-    if (rp == NULL) {
-        return gs_fail(err, GS_E_NULL, "rack_pinion");
+    return (const gs_mesh_ *)(const void *)consts;
+}
+
+gs_status gs_rack_pinion_init(gs_rack_pinion_consts *consts, gs_block_state *state,
+                              const gs_rack_pinion_params *params, gs_error *err)
+{
+    if (consts == NULL || state == NULL) {
+        return gs_fail(err, GS_E_NULL, consts == NULL ? "consts" : "state");
     }
-    return gs_rack_pinion_mesh(&rp->mesh, params, err);
+    gs_mesh_ *m = (gs_mesh_ *)(void *)consts;
+    const gs_status s = gs_rack_pinion_mesh(m, params, err);
+    if (s == GS_OK) {
+        gs_mesh_reset(m, state);
+    }
+    return s;
 }
 
-void gs_rack_pinion_reset(gs_rack_pinion *rp)
+void gs_rack_pinion_reset(const gs_rack_pinion_consts *consts, gs_block_state *state)
 {
-    gs_mesh_reset(&rp->mesh);
+    gs_mesh_reset(consts_mesh(consts), state);
 }
 
-void gs_rack_pinion_step(gs_rack_pinion *rp, gs_real dt_s, const gs_rack_ports_in *in,
-                         gs_rack_ports_out *out)
+void gs_rack_pinion_step(const gs_rack_pinion_consts *consts, gs_block_state *state, gs_real dt_s,
+                         const gs_rack_ports_in *in, gs_rack_ports_out *out)
 {
     const gs_mesh_in_ mi = {in->pinion_speed_rad_s, in->rack_velocity_m_s, in->rack_force_N,
                             in->heat_flow_W, in->temperature_K, in->use_temperature_input};
     gs_mesh_out_ mo;
-    gs_mesh_block_step(&rp->mesh, dt_s, &mi, &mo);
+    gs_mesh_block_step(consts_mesh(consts), state, dt_s, &mi, &mo);
     out->pinion_torque_Nm = mo.base_torque;
     out->rack_force_N = mo.follower_torque;
     out->rack_velocity_m_s = mo.follower_speed;

@@ -26,6 +26,44 @@
 
 #define LINEARISATION_PASSES 2
 
+/* What init derives for a rig; the public gs_rig_consts is an opaque view of
+ * it. The step reads it and writes the public gs_rig_state. */
+typedef struct {
+    gs_mesh_ mesh;
+    gs_rig_block block;
+    gs_base_drive base_drive;
+    gs_temperature_source temperature_source;
+    int heat_path;
+    int substeps;
+    int substeps_capped;           /* 1: the automatic count stopped at GS_AUTO_SUBSTEPS_MAX */
+    gs_real dt;
+    gs_real base_inertia;
+    gs_real initial_base_speed;
+    gs_real driven_inertia;
+    gs_real load_coulomb;
+    gs_real inv_load_speed_threshold;
+    gs_real load_offset;
+    gs_real inv_thermal_resistance;
+    gs_real accel_gain;            /* dt/(tau + dt) */
+    gs_real inv_eff_mass_contact;  /* 1/m_eff at the pitch line, 1/kg */
+    gs_real substep;               /* h = dt/substeps, s */
+    gs_real inv_substeps;          /* 1/substeps */
+    gs_real inv_driven_inertia_sub;/* 1/(J_F + h*mu_F): the implicit viscous term */
+    gs_real inv_base_inertia_sub;  /* 1/(J_B + h*mu_B) (torque-driven base) */
+    gs_real contact_h_omega_n;     /* h*omega_n of the contact at the chosen sub-step */
+    gs_contact_step_ contact;      /* backward-Euler contact constants for h */
+    gs_contact_step_ contact_stuck;/* the same with the driven side held by its friction
+                                      (torque-driven base: the base inertia alone) */
+} rig_consts_;
+
+GS_STATIC_ASSERT_(rig_consts_size, sizeof(gs_rig_consts) == sizeof(rig_consts_));
+
+/* The opaque public constants are a view of rig_consts_. */
+static const rig_consts_ *consts_of(const gs_rig_consts *consts)
+{
+    return (const rig_consts_ *)(const void *)consts;
+}
+
 gs_rig_params gs_rig_params_default(void)
 {
     gs_rig_params p;
@@ -95,7 +133,7 @@ static gs_status check_rig(const gs_rig_params *p, gs_rig_block block, gs_error 
 
 /* The torque-driven base's share of 1/m_eff at the pitch line for sub-step
  * h, its viscous term implicit (0 for a speed-driven base). */
-static gs_real base_inverse_mass(const gs_rig *r, gs_real h)
+static gs_real base_inverse_mass(const rig_consts_ *r, gs_real h)
 {
     const gs_mesh_ *m = &r->mesh;
     if (r->base_drive != GS_BASE_TORQUE_DRIVEN) {
@@ -105,7 +143,7 @@ static gs_real base_inverse_mass(const gs_rig *r, gs_real h)
 }
 
 /* 1/m_eff at the pitch line for sub-step h, with the viscous terms implicit. */
-static gs_real contact_inverse_mass(const gs_rig *r, gs_real h)
+static gs_real contact_inverse_mass(const rig_consts_ *r, gs_real h)
 {
     const gs_mesh_ *m = &r->mesh;
     return m->follower_radius * m->follower_radius / (r->driven_inertia + h * m->mu_follower)
@@ -114,7 +152,7 @@ static gs_real contact_inverse_mass(const gs_rig *r, gs_real h)
 
 /* Smallest count with (h*omega_n)^2 <= 0.25, i.e. h*omega_n <= 0.5, capped:
  * backward Euler is stable at any count; this only buys accuracy. */
-static int automatic_substeps(const gs_rig *r)
+static int automatic_substeps(const rig_consts_ *r)
 {
     const gs_real k_over_m = r->mesh.stiffness * contact_inverse_mass(r, r->dt);
     int n = 1;
@@ -130,7 +168,7 @@ static int automatic_substeps(const gs_rig *r)
 
 /* h*omega_n of the contact at sub-step h with 1/m_eff = inv_mass
  * (omega_n = sqrt(K/m_eff)). */
-static gs_real contact_h_omega_n(const gs_rig *r, gs_real h, gs_real inv_mass)
+static gs_real contact_h_omega_n(const rig_consts_ *r, gs_real h, gs_real inv_mass)
 {
     const gs_real x2 = h * h * r->mesh.stiffness * inv_mass;
     /* Newton for the square root (the core uses no libm), from above: it
@@ -148,7 +186,7 @@ static gs_real contact_h_omega_n(const gs_rig *r, gs_real h, gs_real inv_mass)
 
 /* Fills the rig around an already validated mesh; the rig parameters were
  * checked by check_rig. Writes in place: no second rig on the stack. */
-static void rig_fill(gs_rig *r, gs_rig_block block, const gs_rig_params *p)
+static void rig_fill(rig_consts_ *r, gs_rig_block block, const gs_rig_params *p)
 {
     r->block = block;
     r->dt = p->dt_s;
@@ -189,65 +227,61 @@ static void rig_fill(gs_rig *r, gs_rig_block block, const gs_rig_params *p)
         r->contact_h_omega_n = contact_h_omega_n(r, r->substep, r->inv_eff_mass_contact);
         r->substeps_capped = p->contact_substeps == 0 && r->contact_h_omega_n > GS_R(0.5);
     }
-    gs_rig_reset(r);
 }
 
 /* The rig parameters are checked first, so that once the block's mesh is
- * validated (and only then written into the rig) nothing can fail: a failed
- * init leaves the rig unchanged. */
-gs_status gs_rig_init_gear(gs_rig *rig, const gs_simple_gear_params *gear,
-                           const gs_rig_params *params, gs_error *err)
+ * validated (and only then written into consts) nothing can fail: a failed
+ * init leaves consts and state unchanged. */
+gs_status gs_rig_init_gear(gs_rig_consts *consts, gs_rig_state *state,
+                           const gs_simple_gear_params *gear, const gs_rig_params *params,
+                           gs_error *err)
 {
-    if (rig == NULL || gear == NULL || params == NULL) {
-        return gs_fail(err, GS_E_NULL, rig == NULL ? "rig" : (gear == NULL ? "gear" : "params"));
+    if (consts == NULL || state == NULL || gear == NULL || params == NULL) {
+        return gs_fail(err, GS_E_NULL,
+                       consts == NULL ? "consts" : (state == NULL ? "state" : (gear == NULL ? "gear" : "params")));
     }
+    rig_consts_ *r = (rig_consts_ *)(void *)consts;
     gs_status s = check_rig(params, GS_RIG_SIMPLE_GEAR, err);
-    if (s == GS_OK && (s = gs_simple_gear_mesh(&rig->mesh, gear, err)) == GS_OK) {
-        rig_fill(rig, GS_RIG_SIMPLE_GEAR, params);
+    if (s == GS_OK && (s = gs_simple_gear_mesh(&r->mesh, gear, err)) == GS_OK) {
+        rig_fill(r, GS_RIG_SIMPLE_GEAR, params);
+        gs_rig_reset(consts, state);
     }
     return s;
 }
 
-gs_status gs_rig_init_rack(gs_rig *rig, const gs_rack_pinion_params *rack,
-                           const gs_rig_params *params, gs_error *err)
+gs_status gs_rig_init_rack(gs_rig_consts *consts, gs_rig_state *state,
+                           const gs_rack_pinion_params *rack, const gs_rig_params *params,
+                           gs_error *err)
 {
-    if (rig == NULL || rack == NULL || params == NULL) {
-        return gs_fail(err, GS_E_NULL, rig == NULL ? "rig" : (rack == NULL ? "rack" : "params"));
+    if (consts == NULL || state == NULL || rack == NULL || params == NULL) {
+        return gs_fail(err, GS_E_NULL,
+                       consts == NULL ? "consts" : (state == NULL ? "state" : (rack == NULL ? "rack" : "params")));
     }
+    rig_consts_ *r = (rig_consts_ *)(void *)consts;
     gs_status s = check_rig(params, GS_RIG_RACK_PINION, err);
-    if (s == GS_OK && (s = gs_rack_pinion_mesh(&rig->mesh, rack, err)) == GS_OK) {
-        rig_fill(rig, GS_RIG_RACK_PINION, params);
+    if (s == GS_OK && (s = gs_rack_pinion_mesh(&r->mesh, rack, err)) == GS_OK) {
+        rig_fill(r, GS_RIG_RACK_PINION, params);
+        gs_rig_reset(consts, state);
     }
     return s;
 }
 
-void gs_rig_reset(gs_rig *rig)
+void gs_rig_reset(const gs_rig_consts *consts, gs_rig_state *st)
 {
-    gs_mesh_reset(&rig->mesh);
-    rig->started = 0;
-    rig->base_speed = rig->base_drive == GS_BASE_TORQUE_DRIVEN ? rig->initial_base_speed : GS_R(0.0);
-    rig->follower_speed = rig->mesh.inv_ratio * rig->base_speed;
-    rig->base_angle = GS_R(0.0);
-    rig->follower_position = GS_R(0.0);
-    rig->previous_base_speed_input = GS_R(0.0);
-    rig->base_acceleration = GS_R(0.0);
-}
-
-void gs_rig_copy_state(gs_rig *to, const gs_rig *from)
-{
-    gs_mesh_copy_state(&to->mesh, &from->mesh);
-    to->started = from->started;
-    to->base_speed = from->base_speed;
-    to->base_angle = from->base_angle;
-    to->follower_speed = from->follower_speed;
-    to->follower_position = from->follower_position;
-    to->previous_base_speed_input = from->previous_base_speed_input;
-    to->base_acceleration = from->base_acceleration;
+    const rig_consts_ *r = consts_of(consts);
+    gs_mesh_reset(&r->mesh, &st->block);
+    st->started = 0;
+    st->base_speed = r->base_drive == GS_BASE_TORQUE_DRIVEN ? r->initial_base_speed : GS_R(0.0);
+    st->follower_speed = r->mesh.inv_ratio * st->base_speed;
+    st->base_angle = GS_R(0.0);
+    st->follower_position = GS_R(0.0);
+    st->base_speed_sample = GS_R(0.0);
+    st->base_acceleration = GS_R(0.0);
 }
 
 /* External torque on the driven side of the speed-driven rigid rig: load,
  * offset and Coulomb friction smoothed on the imposed speed. */
-static gs_real driven_external(const gs_rig *r, gs_real load, gs_real w_f)
+static gs_real driven_external(const rig_consts_ *r, gs_real load, gs_real w_f)
 {
     return load + r->load_offset
            - r->load_coulomb * gs_tanh(GS_R(4.0) * w_f * r->inv_load_speed_threshold);
@@ -265,39 +299,39 @@ static gs_real friction_project(gs_real w_free, gs_real bound)
     return w_free > GS_R(0.0) ? w_free - bound : w_free + bound;
 }
 
-static void rigid_speed_driven(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
+static void rigid_speed_driven(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
                                gs_rig_output *out)
 {
-    gs_mesh_ *m = &r->mesh;
-    const gs_real w_b = in->base_speed_rad_s;
-    const gs_real alpha_b = r->base_acceleration;
+    const gs_mesh_ *m = &r->mesh;
+    const gs_real w_b = in->base_speed;
+    const gs_real alpha_b = st->base_acceleration;
     const gs_real w_f = m->inv_ratio * w_b;
     const gs_real a_f = m->inv_ratio * alpha_b;
     const gs_real tau_f = driven_external(r, in->load, w_f) - r->driven_inertia * a_f;
     const gs_real t_f = tau_f - m->mu_follower * w_f;
     const gs_real tau_mesh = gs_mesh_loss_torque(m, ctx, t_f, w_f);
     const gs_real tau_b = m->mu_base * w_b + m->inv_ratio * (tau_mesh - t_f);
-    m->last_follower_torque = t_f;
-    r->base_speed = w_b;
-    r->follower_speed = w_f;
-    out->base_torque_Nm = tau_b + r->base_inertia * alpha_b;
-    out->base_port_torque_Nm = tau_b;
+    st->block.follower_torque = t_f;
+    st->base_speed = w_b;
+    st->follower_speed = w_f;
+    out->base_torque = tau_b + r->base_inertia * alpha_b;
+    out->base_port_torque = tau_b;
     out->follower_port_torque = tau_f;
     out->follower_acceleration = a_f;
-    out->mesh_loss_power_W = tau_mesh * w_f;
-    out->loss_power_W = out->mesh_loss_power_W + m->mu_base * w_b * w_b + m->mu_follower * w_f * w_f;
-    out->port_power_W = tau_b * w_b + tau_f * w_f;
+    out->mesh_loss_power = tau_mesh * w_f;
+    out->loss_power = out->mesh_loss_power + m->mu_base * w_b * w_b + m->mu_follower * w_f * w_f;
+    out->port_power = tau_b * w_b + tau_f * w_f;
 }
 
-static void rigid_torque_driven(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
+static void rigid_torque_driven(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
                                 gs_rig_output *out)
 {
-    gs_mesh_ *m = &r->mesh;
+    const gs_mesh_ *m = &r->mesh;
     const gs_real h = r->dt;
     const gs_real a = m->inv_ratio;
-    const gs_real w = r->base_speed;
+    const gs_real w = st->base_speed;
     const gs_real push = in->load + r->load_offset;
-    gs_real t_f = m->last_follower_torque;
+    gs_real t_f = st->block.follower_torque;
     gs_real w_next = w;
     gs_real dw = GS_R(0.0);
     for (int pass = 0; pass < LINEARISATION_PASSES; ++pass) {
@@ -311,7 +345,7 @@ static void rigid_torque_driven(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig
         const gs_real q = a * gs_max(GS_R(1.0) - m1, GS_R(0.0));
         const gs_real visc = m->mu_base + q * m->mu_follower * a;
         const gs_real denominator = (r->base_inertia + q * a * r->driven_inertia) / h + visc;
-        const gs_real w_free = w + (in->base_torque_Nm - a * m0 + q * push - visc * w) / denominator;
+        const gs_real w_free = w + (in->base_torque - a * m0 + q * push - visc * w) / denominator;
         const gs_real bound = gs_abs(q) * r->load_coulomb / denominator;
         w_next = friction_project(w_free, bound);
         dw = w_next - w;
@@ -323,16 +357,16 @@ static void rigid_torque_driven(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig
     const gs_real tau_mesh = gs_mesh_loss_torque(m, ctx, t_f, w_f);
     const gs_real tau_b = m->mu_base * w_next + a * (tau_mesh - t_f);
     const gs_real tau_f = t_f + m->mu_follower * w_f;
-    m->last_follower_torque = t_f;
-    r->base_speed = w_next;
-    r->follower_speed = w_f;
-    out->base_torque_Nm = in->base_torque_Nm;
-    out->base_port_torque_Nm = tau_b;
+    st->block.follower_torque = t_f;
+    st->base_speed = w_next;
+    st->follower_speed = w_f;
+    out->base_torque = in->base_torque;
+    out->base_port_torque = tau_b;
     out->follower_port_torque = tau_f;
     out->follower_acceleration = a * dw / h;
-    out->mesh_loss_power_W = tau_mesh * w_f;
-    out->loss_power_W = out->mesh_loss_power_W + m->mu_base * w_next * w_next + m->mu_follower * w_f * w_f;
-    out->port_power_W = tau_b * w_next + tau_f * w_f;
+    out->mesh_loss_power = tau_mesh * w_f;
+    out->loss_power = out->mesh_loss_power + m->mu_base * w_next * w_next + m->mu_follower * w_f * w_f;
+    out->port_power = tau_b * w_next + tau_f * w_f;
 }
 
 typedef struct {
@@ -341,7 +375,7 @@ typedef struct {
 } substep_end;
 
 /* The base's end speed for a contact force f over the sub-step. */
-static inline gs_real base_end_speed(const gs_rig *r, gs_real w_b_free, gs_real f)
+static inline gs_real base_end_speed(const rig_consts_ *r, gs_real w_b_free, gs_real f)
 {
     return r->base_drive == GS_BASE_SPEED_DRIVEN
                ? w_b_free
@@ -351,13 +385,13 @@ static inline gs_real base_end_speed(const gs_rig *r, gs_real w_b_free, gs_real 
 /* One sub-step with the follower moving freely from its free end speed
  * w_f_free (every torque but the contact included): the backward-Euler
  * contact. Changes only the lock flag. */
-static inline substep_end contact_moving(gs_rig *r, gs_real w_b_free, gs_real w_f_free)
+static inline substep_end contact_moving(const rig_consts_ *r, gs_rig_state *st, gs_real w_b_free, gs_real w_f_free)
 {
-    gs_mesh_ *m = &r->mesh;
+    const gs_mesh_ *m = &r->mesh;
     const gs_real sr_f = m->direction * m->follower_radius;
     substep_end e;
     const gs_real u_free = m->base_radius * w_b_free - sr_f * w_f_free;
-    e.u = gs_contact_solve(m, &r->contact, m->position, u_free, &e.f, &e.f_spring);
+    e.u = gs_contact_solve(m, &st->block, &r->contact, st->block.backlash_position, u_free, &e.f, &e.f_spring);
     e.w_f = w_f_free + r->substep * sr_f * e.f * r->inv_driven_inertia_sub;
     e.w_b = base_end_speed(r, w_b_free, e.f);
     return e;
@@ -365,25 +399,25 @@ static inline substep_end contact_moving(gs_rig *r, gs_real w_b_free, gs_real w_
 
 /* contact_moving with a friction torque `friction` (N*m or N, on the
  * follower) added to the free motion: sliding against the motion. */
-static inline substep_end contact_sliding(gs_rig *r, gs_real w_b_free, gs_real momentum, gs_real friction)
+static inline substep_end contact_sliding(const rig_consts_ *r, gs_rig_state *st, gs_real w_b_free, gs_real momentum, gs_real friction)
 {
-    return contact_moving(r, w_b_free, (momentum + r->substep * friction) * r->inv_driven_inertia_sub);
+    return contact_moving(r, st, w_b_free, (momentum + r->substep * friction) * r->inv_driven_inertia_sub);
 }
 
 /* One sub-step with the follower held at rest by its friction: the contact
  * sees the base alone. A speed-driven base imposes the tooth motion, so the
  * force is the law at the end of the sub-step; a torque-driven base solves
  * the backward-Euler contact with its own inertia. */
-static inline substep_end contact_stuck(gs_rig *r, gs_real w_b_free)
+static inline substep_end contact_stuck(const rig_consts_ *r, gs_rig_state *st, gs_real w_b_free)
 {
-    gs_mesh_ *m = &r->mesh;
+    const gs_mesh_ *m = &r->mesh;
     substep_end e;
     const gs_real u_free = m->base_radius * w_b_free;
     if (r->base_drive == GS_BASE_SPEED_DRIVEN) {
         e.u = u_free;
-        e.f = gs_contact_force(m, m->position + r->substep * u_free, u_free, &e.f_spring);
+        e.f = gs_contact_force(m, st->block.backlash_position + r->substep * u_free, u_free, &e.f_spring);
     } else {
-        e.u = gs_contact_solve(m, &r->contact_stuck, m->position, u_free, &e.f, &e.f_spring);
+        e.u = gs_contact_solve(m, &st->block, &r->contact_stuck, st->block.backlash_position, u_free, &e.f, &e.f_spring);
     }
     e.w_f = GS_R(0.0);
     e.w_b = base_end_speed(r, w_b_free, e.f);
@@ -398,35 +432,35 @@ static inline substep_end contact_stuck(gs_rig *r, gs_real w_b_free)
  * so a sub-step costs one contact solve while sliding on and at most three
  * (five with the static-contact lock, see below). *friction is the friction
  * torque on the follower. */
-static substep_end substep_with_friction(gs_rig *r, gs_real w_b_free, gs_real momentum, gs_real bound,
+static substep_end substep_with_friction(const rig_consts_ *r, gs_rig_state *st, gs_real w_b_free, gs_real momentum, gs_real bound,
                                          gs_real *friction)
 {
-    gs_mesh_ *m = &r->mesh;
-    const gs_real w_f = r->follower_speed;
-    const int locked = m->locked;
+    const gs_mesh_ *m = &r->mesh;
+    const gs_real w_f = st->follower_speed;
+    const int locked = st->block.contact_locked;
     substep_end e;
     if (!(bound > GS_R(0.0))) {
         *friction = GS_R(0.0);
-        return contact_moving(r, w_b_free, momentum * r->inv_driven_inertia_sub);
+        return contact_moving(r, st, w_b_free, momentum * r->inv_driven_inertia_sub);
     }
     if (w_f > GS_R(0.0) || w_f < GS_R(0.0)) {
         *friction = -gs_sign(w_f) * bound;
-        e = contact_sliding(r, w_b_free, momentum, *friction);
+        e = contact_sliding(r, st, w_b_free, momentum, *friction);
         if (*friction * e.w_f <= GS_R(0.0)) { /* at exactly 0 any friction within the bound is consistent */
             return e;
         }
-        m->locked = locked;
+        st->block.contact_locked = locked;
     }
-    e = contact_stuck(r, w_b_free);
+    e = contact_stuck(r, st, w_b_free);
     /* J_F*(0 - w_F) = h*(others + s*r_F*f + friction) */
     const gs_real needed = -(momentum * r->contact.inv_h + m->direction * m->follower_radius * e.f);
     if (gs_abs(needed) <= bound) {
         *friction = needed;
         return e;
     }
-    m->locked = locked;
+    st->block.contact_locked = locked;
     *friction = needed < GS_R(0.0) ? -bound : bound; /* against the way the rest pushes */
-    e = contact_sliding(r, w_b_free, momentum, *friction);
+    e = contact_sliding(r, st, w_b_free, momentum, *friction);
     if (*friction * e.w_f <= GS_R(0.0)) {
         return e;
     }
@@ -435,62 +469,62 @@ static substep_end substep_with_friction(gs_rig *r, gs_real w_b_free, gs_real mo
      * fourth solve). If that releases the lock and the follower turns back,
      * the lock's hysteresis leaves no consistent friction: the sub-step runs
      * without it (a fifth solve), which never does negative work. */
-    m->locked = locked;
+    st->block.contact_locked = locked;
     *friction = -gs_sign(e.w_f) * bound;
-    e = contact_sliding(r, w_b_free, momentum, *friction);
+    e = contact_sliding(r, st, w_b_free, momentum, *friction);
     if (*friction * e.w_f <= GS_R(0.0)) {
         return e;
     }
-    m->locked = locked;
+    st->block.contact_locked = locked;
     *friction = GS_R(0.0);
-    return contact_moving(r, w_b_free, momentum * r->inv_driven_inertia_sub);
+    return contact_moving(r, st, w_b_free, momentum * r->inv_driven_inertia_sub);
 }
 
-static void backlash_step(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
+static void backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
                           gs_rig_output *out)
 {
-    gs_mesh_ *m = &r->mesh;
+    const gs_mesh_ *m = &r->mesh;
     const int n = r->substeps;
     const gs_real h = r->substep;
     const gs_real r_b = m->base_radius;
     const gs_real sr_f = m->direction * m->follower_radius;
     const int speed_driven = r->base_drive == GS_BASE_SPEED_DRIVEN;
-    const gs_real w_b_start = r->base_speed;
-    const gs_real w_f_start = r->follower_speed;
+    const gs_real w_b_start = st->base_speed;
+    const gs_real w_f_start = st->follower_speed;
     const gs_real push = in->load + r->load_offset;
     gs_real sum_tau_b = GS_R(0.0), sum_tau_f = GS_R(0.0), sum_mesh = GS_R(0.0), sum_loss = GS_R(0.0);
     gs_real sum_port = GS_R(0.0), sum_f = GS_R(0.0);
     for (int k = 0; k < n; ++k) {
-        const gs_real w_f = r->follower_speed;
+        const gs_real w_f = st->follower_speed;
         /* The meshing loss on the last contact force (physics.md 4.6) acts as
          * a friction on the follower, bounded like the load's Coulomb
          * friction. Only its part that opposes the motion is applied: the
          * Simscape smoothing's active sliver near zero power would be an
          * explicit torque proportional to the contact force, which a stiff
          * contact on a light follower turns into a divergence. */
-        const gs_real t_f0 = -sr_f * m->contact_force;
-        const gs_real tau_law = gs_mesh_loss_from_tooth(m, ctx, t_f0, w_f, m->last_follower_torque);
-        m->last_follower_torque = t_f0 + tau_law;
+        const gs_real t_f0 = -sr_f * st->block.contact_force;
+        const gs_real tau_law = gs_mesh_loss_from_tooth(m, ctx, t_f0, w_f, st->block.follower_torque);
+        st->block.follower_torque = t_f0 + tau_law;
         const gs_real mesh_friction = tau_law * w_f > GS_R(0.0) ? gs_abs(tau_law) : GS_R(0.0);
         const gs_real bound = r->load_coulomb + mesh_friction;
         /* the held speed ramps linearly from the last sample to this one */
         const gs_real w_b_free =
-            speed_driven ? w_b_start + (in->base_speed_rad_s - w_b_start) * ((gs_real)(k + 1) * r->inv_substeps)
-                         : (r->base_inertia * r->base_speed + h * in->base_torque_Nm) * r->inv_base_inertia_sub;
+            speed_driven ? w_b_start + (in->base_speed - w_b_start) * ((gs_real)(k + 1) * r->inv_substeps)
+                         : (r->base_inertia * st->base_speed + h * in->base_torque) * r->inv_base_inertia_sub;
         gs_real friction;
-        const substep_end e = substep_with_friction(r, w_b_free, r->driven_inertia * w_f + h * push, bound,
+        const substep_end e = substep_with_friction(r, st, w_b_free, r->driven_inertia * w_f + h * push, bound,
                                                     &friction);
         /* the meshing loss's share of the friction (it acts on the follower as -tau_mesh) */
         const gs_real tau_mesh = bound > GS_R(0.0) ? -friction * (mesh_friction / bound) : GS_R(0.0);
         /* x moves with the relative speed the contact was solved for: the end
          * speeds give it back only to rounding, and that rounding times the
          * spring force (held teeth: large force, u = 0) would create energy */
-        m->position += h * e.u;
-        m->contact_force = e.f;
-        r->base_speed = e.w_b;
-        r->follower_speed = e.w_f;
-        r->base_angle += h * e.w_b;
-        r->follower_position += h * e.w_f;
+        st->block.backlash_position += h * e.u;
+        st->block.contact_force = e.f;
+        st->base_speed = e.w_b;
+        st->follower_speed = e.w_f;
+        st->base_angle += h * e.w_b;
+        st->follower_position += h * e.w_f;
         const gs_real tau_b = r_b * e.f + m->mu_base * e.w_b;
         const gs_real tau_f = -sr_f * e.f + tau_mesh + m->mu_follower * e.w_f;
         /* paired with the end speeds like every port term: the power identity
@@ -505,73 +539,95 @@ static void backlash_step(gs_rig *r, const gs_loss_ctx_ *ctx, const gs_rig_input
         sum_f += e.f;
     }
     const gs_real inv_n = r->inv_substeps;
-    out->base_port_torque_Nm = sum_tau_b * inv_n;
-    out->base_torque_Nm = speed_driven ? out->base_port_torque_Nm + r->base_inertia * r->base_acceleration
-                                       : in->base_torque_Nm;
+    out->base_port_torque = sum_tau_b * inv_n;
+    out->base_torque = speed_driven ? out->base_port_torque + r->base_inertia * st->base_acceleration
+                                       : in->base_torque;
     out->follower_port_torque = sum_tau_f * inv_n;
-    out->mesh_loss_power_W = sum_mesh * inv_n;
-    out->loss_power_W = sum_loss * inv_n;
-    out->port_power_W = sum_port * inv_n;
-    out->contact_force_N = sum_f * inv_n;
-    out->follower_acceleration = (r->follower_speed - w_f_start) / r->dt;
+    out->mesh_loss_power = sum_mesh * inv_n;
+    out->loss_power = sum_loss * inv_n;
+    out->port_power = sum_port * inv_n;
+    out->contact_force = sum_f * inv_n;
+    out->follower_acceleration = (st->follower_speed - w_f_start) / r->dt;
 }
 
-void gs_rig_step(gs_rig *r, const gs_rig_input *in, gs_rig_output *out)
+void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *st, const gs_rig_input *in,
+                 gs_rig_output *out)
 {
-    gs_mesh_ *m = &r->mesh;
+    const rig_consts_ *r = consts_of(consts);
+    const gs_mesh_ *m = &r->mesh;
     const int from_input = r->temperature_source == GS_TEMPERATURE_FROM_INPUT;
     if (r->base_drive == GS_BASE_SPEED_DRIVEN) {
-        const gs_real w_in = in->base_speed_rad_s;
-        if (!r->started) {
+        const gs_real w_in = in->base_speed;
+        if (!st->started) {
             /* the first sample sets the speeds: no acceleration, teeth moving together */
-            r->previous_base_speed_input = w_in;
-            r->base_speed = w_in;
-            r->follower_speed = m->inv_ratio * w_in;
+            st->base_speed_sample = w_in;
+            st->base_speed = w_in;
+            st->follower_speed = m->inv_ratio * w_in;
         }
-        const gs_real raw = (w_in - r->previous_base_speed_input) / r->dt;
-        r->base_acceleration += r->accel_gain * (raw - r->base_acceleration);
-        r->previous_base_speed_input = w_in;
+        const gs_real raw = (w_in - st->base_speed_sample) / r->dt;
+        st->base_acceleration += r->accel_gain * (raw - st->base_acceleration);
+        st->base_speed_sample = w_in;
     }
-    r->started = 1;
+    st->started = 1;
     gs_loss_ctx_ ctx;
-    gs_mesh_loss_prepare(m, from_input ? in->measured_temperature_K : m->temperature, &ctx);
-    out->contact_force_N = GS_R(0.0);
+    gs_mesh_loss_prepare(m, from_input ? in->measured_temperature : st->block.temperature, &ctx);
+    out->contact_force = GS_R(0.0);
     if (m->backlash) {
-        backlash_step(r, &ctx, in, out);
+        backlash_step(r, st, &ctx, in, out);
     } else {
         if (r->base_drive == GS_BASE_SPEED_DRIVEN) {
-            rigid_speed_driven(r, &ctx, in, out);
+            rigid_speed_driven(r, st, &ctx, in, out);
         } else {
-            rigid_torque_driven(r, &ctx, in, out);
+            rigid_torque_driven(r, st, &ctx, in, out);
         }
-        r->base_angle += r->dt * r->base_speed;
-        r->follower_position += r->dt * r->follower_speed;
+        st->base_angle += r->dt * st->base_speed;
+        st->follower_position += r->dt * st->follower_speed;
     }
     if (from_input) {
-        m->temperature = in->measured_temperature_K;
+        st->block.temperature = in->measured_temperature;
     } else {
-        gs_mesh_thermal_step(m, r->dt, out->loss_power_W, GS_R(0.0), in->ambient_temperature_K,
+        gs_mesh_thermal_step(m, &st->block, r->dt, out->loss_power, GS_R(0.0), in->ambient_temperature,
                              r->inv_thermal_resistance);
     }
-    out->base_speed_rad_s = r->base_speed;
-    out->base_angle_rad = r->base_angle;
-    out->follower_speed = r->follower_speed;
-    out->follower_position = r->follower_position;
-    out->contact_energy_J = m->backlash ? gs_contact_energy(m, m->position) : GS_R(0.0);
-    out->temperature_K = m->temperature;
-    out->backlash_position_m = m->position;
+    out->base_speed = st->base_speed;
+    out->base_angle = st->base_angle;
+    out->follower_speed = st->follower_speed;
+    out->follower_position = st->follower_position;
+    out->contact_energy = m->backlash ? gs_contact_energy(m, st->block.backlash_position) : GS_R(0.0);
+    out->temperature = st->block.temperature;
+    out->backlash_position = st->block.backlash_position;
 }
 
-void gs_rig_get_info(const gs_rig *rig, gs_rig_info *info)
+void gs_rig_get_info(const gs_rig_consts *consts, gs_rig_info *info)
 {
-    info->contact_substeps = rig->substeps;
-    info->contact_h_omega_n = rig->contact_h_omega_n;
-    info->substeps_capped = rig->substeps_capped;
+    const rig_consts_ *r = consts_of(consts);
+    info->contact_substeps = r->substeps;
+    info->contact_h_omega_n = r->contact_h_omega_n;
+    info->substeps_capped = r->substeps_capped;
+    info->follower_per_base = r->mesh.inv_ratio;
 }
 
-void gs_rig_run(gs_rig *rig, size_t n, const gs_rig_input *in, gs_rig_output *out)
+void gs_rig_run(const gs_rig_consts *consts, gs_rig_state *state, size_t n, const gs_rig_input *in,
+                gs_rig_output *out)
 {
     for (size_t i = 0; i < n; ++i) {
-        gs_rig_step(rig, &in[i], &out[i]);
+        gs_rig_step(consts, state, &in[i], &out[i]);
     }
 }
+
+/* ---- The field tables of gearsim/fields.h, for generic readers (Python, tools). */
+#define GS_IS_INT_gs_real 0
+#define GS_IS_INT_int 1
+#define GS_INPUT_INFO_(type, name, gear_unit, rack_unit, doc) \
+    {#name, gear_unit, rack_unit, doc, offsetof(gs_rig_input, name), GS_IS_INT_##type},
+#define GS_OUTPUT_INFO_(type, name, gear_unit, rack_unit, doc) \
+    {#name, gear_unit, rack_unit, doc, offsetof(gs_rig_output, name), GS_IS_INT_##type},
+#define GS_BLOCK_STATE_INFO_(type, name, gear_unit, rack_unit, doc) \
+    {#name, gear_unit, rack_unit, doc, offsetof(gs_rig_state, block) + offsetof(gs_block_state, name), GS_IS_INT_##type},
+#define GS_RIG_STATE_INFO_(type, name, gear_unit, rack_unit, doc) \
+    {#name, gear_unit, rack_unit, doc, offsetof(gs_rig_state, name), GS_IS_INT_##type},
+
+const gs_field_info gs_rig_input_info[GS_RIG_INPUT_FIELDS] = {GS_RIG_INPUT_LIST(GS_INPUT_INFO_)};
+const gs_field_info gs_rig_output_info[GS_RIG_OUTPUT_FIELDS] = {GS_RIG_OUTPUT_LIST(GS_OUTPUT_INFO_)};
+const gs_field_info gs_rig_state_info[GS_RIG_STATE_FIELDS] = {
+    GS_BLOCK_STATE_LIST(GS_BLOCK_STATE_INFO_) GS_RIG_STATE_LIST(GS_RIG_STATE_INFO_)};

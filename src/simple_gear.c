@@ -180,16 +180,16 @@ gs_status gs_simple_gear_mesh(gs_mesh_ *mesh, const gs_simple_gear_params *p, gs
                                       p->temperature_count);
     }
     if (p->friction_model == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY) {
-        m.eta_of_T_load.nx = p->temperature_count;
-        m.eta_of_T_load.ny = p->load_count;
+        m.table.eta_of_T_load.nx = p->temperature_count;
+        m.table.eta_of_T_load.ny = p->load_count;
         for (int i = 0; i < p->temperature_count; ++i) {
-            m.eta_of_T_load.x[i] = p->temperature_vector_K[i];
+            m.table.eta_of_T_load.x[i] = p->temperature_vector_K[i];
             for (int j = 0; j < p->load_count; ++j) {
-                m.eta_of_T_load.z[i][j] = p->efficiency_matrix[i][j];
+                m.table.eta_of_T_load.z[i][j] = p->efficiency_matrix[i][j];
             }
         }
         for (int j = 0; j < p->load_count; ++j) {
-            m.eta_of_T_load.y[j] = p->load_vector_Nm[j];
+            m.table.eta_of_T_load.y[j] = p->load_vector_Nm[j];
         }
     }
     if ((s = gs_mesh_set_thermal(&m, p->thermal_mass_J_K, p->initial_temperature_K, err)) != GS_OK) {
@@ -203,33 +203,45 @@ gs_status gs_simple_gear_mesh(gs_mesh_ *mesh, const gs_simple_gear_params *p, gs
                                   g * p->backlash.base_radius_m, err)) != GS_OK) {
         return s;
     }
-    gs_mesh_reset(&m);
     *mesh = m;
     gs_error_clear(err);
     return GS_OK;
 }
 
-gs_status gs_simple_gear_init(gs_simple_gear *gear, const gs_simple_gear_params *params,
-                              gs_error *err)
+GS_STATIC_ASSERT_(simple_gear_consts_size, sizeof(gs_simple_gear_consts) == sizeof(gs_mesh_));
+
+/* The opaque public block is a view of the internal constants. */
+static const gs_mesh_ *consts_mesh(const gs_simple_gear_consts *consts)
 {
-    if (gear == NULL) {
-        return gs_fail(err, GS_E_NULL, "gear");
+    return (const gs_mesh_ *)(const void *)consts;
+}
+
+gs_status gs_simple_gear_init(gs_simple_gear_consts *consts, gs_block_state *state,
+                              const gs_simple_gear_params *params, gs_error *err)
+{
+    if (consts == NULL || state == NULL) {
+        return gs_fail(err, GS_E_NULL, consts == NULL ? "consts" : "state");
     }
-    return gs_simple_gear_mesh(&gear->mesh, params, err);
+    gs_mesh_ *m = (gs_mesh_ *)(void *)consts;
+    const gs_status s = gs_simple_gear_mesh(m, params, err);
+    if (s == GS_OK) {
+        gs_mesh_reset(m, state);
+    }
+    return s;
 }
 
-void gs_simple_gear_reset(gs_simple_gear *gear)
+void gs_simple_gear_reset(const gs_simple_gear_consts *consts, gs_block_state *state)
 {
-    gs_mesh_reset(&gear->mesh);
+    gs_mesh_reset(consts_mesh(consts), state);
 }
 
-void gs_simple_gear_step(gs_simple_gear *gear, gs_real dt_s, const gs_gear_ports_in *in,
-                         gs_gear_ports_out *out)
+void gs_simple_gear_step(const gs_simple_gear_consts *consts, gs_block_state *state, gs_real dt_s,
+                         const gs_gear_ports_in *in, gs_gear_ports_out *out)
 {
     const gs_mesh_in_ mi = {in->base_speed_rad_s, in->follower_speed_rad_s, in->follower_torque_Nm,
                             in->heat_flow_W, in->temperature_K, in->use_temperature_input};
     gs_mesh_out_ mo;
-    gs_mesh_block_step(&gear->mesh, dt_s, &mi, &mo);
+    gs_mesh_block_step(consts_mesh(consts), state, dt_s, &mi, &mo);
     out->base_torque_Nm = mo.base_torque;
     out->follower_torque_Nm = mo.follower_torque;
     out->follower_speed_rad_s = mo.follower_speed;

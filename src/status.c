@@ -1,4 +1,4 @@
-/* status.c - status descriptions. */
+/* status.c - status descriptions and the library version. */
 #include "gearsim/types.h"
 
 const char *gs_status_str(gs_status status)
@@ -25,4 +25,9 @@ const char *gs_status_str(gs_status status)
     case GS_E_MAGNITUDE: return "value is so small that its reciprocal overflows";
     }
     return "unknown status";
+}
+
+const char *gs_version(void)
+{
+    return GS_VERSION_STRING;
 }

@@ -47,9 +47,11 @@ typedef struct {
     gs_backlash_params backlash;                /* gap along the rack; base_radius_m unused */
 } gs_rack_pinion_params;
 
+/* What init derives from the parameters (opaque, see GS_BLOCK_CONSTS_REALS);
+ * the step only reads it. The state is a gs_block_state. */
 typedef struct {
-    gs_mesh_ mesh;
-} gs_rack_pinion;
+    gs_real opaque_[GS_BLOCK_CONSTS_REALS];
+} gs_rack_pinion_consts;
 
 /* Port inputs: rigid mesh uses pinion_speed and rack_force (form A); backlash
  * uses pinion_speed and rack_velocity (form C). */
@@ -74,16 +76,17 @@ typedef struct {
     gs_real contact_force_N;
 } gs_rack_ports_out;
 
-gs_rack_pinion_params gs_rack_pinion_params_default(void);
+GS_API gs_rack_pinion_params gs_rack_pinion_params_default(void);
 
 /* Pinion radius in use (m): the parameter, or N_P*x_R/(2*pi). */
-gs_real gs_rack_pinion_radius(const gs_rack_pinion_params *params);
+GS_API gs_real gs_rack_pinion_radius(const gs_rack_pinion_params *params);
 
-gs_status gs_rack_pinion_init(gs_rack_pinion *rp, const gs_rack_pinion_params *params,
-                              gs_error *err);
-void gs_rack_pinion_reset(gs_rack_pinion *rp);
-void gs_rack_pinion_step(gs_rack_pinion *rp, gs_real dt_s, const gs_rack_ports_in *in,
-                         gs_rack_ports_out *out);
+/* As gs_simple_gear_init, gs_simple_gear_reset and gs_simple_gear_step. */
+GS_API gs_status gs_rack_pinion_init(gs_rack_pinion_consts *consts, gs_block_state *state,
+                                     const gs_rack_pinion_params *params, gs_error *err);
+GS_API void gs_rack_pinion_reset(const gs_rack_pinion_consts *consts, gs_block_state *state);
+GS_API void gs_rack_pinion_step(const gs_rack_pinion_consts *consts, gs_block_state *state,
+                                gs_real dt_s, const gs_rack_ports_in *in, gs_rack_ports_out *out);
 
 #ifdef __cplusplus
 }

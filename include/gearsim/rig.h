@@ -72,82 +72,57 @@ typedef struct {
     int contact_substeps;                  /* backlash: sub-steps per step, 1..GS_MAX_SUBSTEPS, 0 = choose at init */
 } gs_rig_params;
 
-/* Per-step inputs. All fields are gs_real, so an array of N inputs is an
- * N x 5 array of reals. Unused fields are ignored. */
+/* Per-step inputs and outputs (gearsim/fields.h: names, units, docs). All
+ * members are gs_real, so an array of N inputs is an N x GS_RIG_INPUT_FIELDS
+ * array of reals, and likewise for the outputs. Unused inputs are ignored. */
 typedef struct {
-    gs_real base_speed_rad_s;       /* speed-driven: held base (pinion) speed */
-    gs_real base_torque_Nm;         /* torque-driven: motor torque on the base inertia */
-    gs_real load;                   /* external load on the driven side, + along + follower rotation / rack direction */
-    gs_real ambient_temperature_K;  /* used when heat_path */
-    gs_real measured_temperature_K; /* used when temperature_source = FROM_INPUT */
+    GS_RIG_INPUT_LIST(GS_FIELD_MEMBER_)
 } gs_rig_input;
 
-#define GS_RIG_INPUT_FIELDS 5
-
-/* Per-step outputs, all gs_real (an N x 15 array of reals). Torques, powers
- * and the contact force are means over the step's sub-steps; speeds, angles,
- * temperature and positions are values at the end of the step. */
 typedef struct {
-    gs_real base_torque_Nm;         /* torque the drive applies to the base shaft (speed-driven:
-                                       base_port_torque + J_B*alpha_B; torque-driven: the input) */
-    gs_real base_speed_rad_s;
-    gs_real base_angle_rad;
-    gs_real follower_speed;           /* follower rad/s or rack m/s */
-    gs_real follower_position;        /* follower rad or rack m */
-    gs_real base_port_torque_Nm;    /* tau_B: what the base shaft applies to the block */
-    gs_real follower_port_torque;     /* tau_F (N*m) or F_R (N): what the driven side applies to the block */
-    gs_real mesh_loss_power_W;      /* meshing loss, >= 0 */
-    gs_real loss_power_W;           /* mesh + viscous + contact damping, >= 0 */
-    gs_real port_power_W;           /* power into the block through both ports */
-    gs_real contact_energy_J;       /* energy stored in the backlash spring at the end of the step */
-    gs_real temperature_K;          /* block temperature at the end of the step (state, or the input) */
-    gs_real backlash_position_m;
-    gs_real contact_force_N;
-    gs_real follower_acceleration;    /* follower rad/s^2 or rack m/s^2 */
+    GS_RIG_OUTPUT_LIST(GS_FIELD_MEMBER_)
 } gs_rig_output;
 
-#define GS_RIG_OUTPUT_FIELDS 15
-
+/* The state of a rig: everything a step changes, and nothing else. Plain
+ * data, no pointers: a snapshot is a copy of it, copying it back restores
+ * it; a state may be stepped with the constants of other parameters (to
+ * re-tune a running rig). Its size is published as sizeof(gs_rig_state). */
 typedef struct {
-    gs_mesh_ mesh;
-    gs_rig_block block;
-    /* constants */
-    gs_real dt;
-    gs_base_drive base_drive;
-    gs_real base_inertia;
-    gs_real initial_base_speed;
-    gs_real driven_inertia;
-    gs_real load_coulomb;
-    gs_real inv_load_speed_threshold;
-    gs_real load_offset;
-    int heat_path;
-    gs_real inv_thermal_resistance;
-    gs_temperature_source temperature_source;
-    gs_real accel_gain;            /* dt/(tau + dt) */
-    int substeps;
-    gs_real inv_eff_mass_contact;  /* 1/m_eff at the pitch line, 1/kg */
-    gs_real substep;               /* h = dt/substeps, s */
-    gs_real inv_substeps;          /* 1/substeps */
-    gs_real inv_driven_inertia_sub;/* 1/(J_F + h*mu_F): the implicit viscous term */
-    gs_real inv_base_inertia_sub;  /* 1/(J_B + h*mu_B) (torque-driven base) */
-    gs_contact_step_ contact;      /* backward-Euler contact constants for h */
-    gs_contact_step_ contact_stuck;/* the same with the driven side held by its friction
-                                      (torque-driven base: the base inertia alone) */
-    int substeps_capped;           /* 1: the automatic count stopped at GS_AUTO_SUBSTEPS_MAX */
-    gs_real contact_h_omega_n;     /* h*omega_n of the contact at the chosen sub-step */
-    /* state */
-    int started;
-    gs_real base_speed;
-    gs_real base_angle;
-    gs_real follower_speed;
-    gs_real follower_position;
-    gs_real previous_base_speed_input;
-    gs_real base_acceleration;
-} gs_rig;
+    gs_block_state block;
+    GS_RIG_STATE_LIST(GS_FIELD_MEMBER_)
+} gs_rig_state;
 
-gs_rig_params gs_rig_params_default(void);
+enum {
+    GS_RIG_INPUT_FIELDS = 0 GS_RIG_INPUT_LIST(GS_FIELD_COUNT_),
+    GS_RIG_OUTPUT_FIELDS = 0 GS_RIG_OUTPUT_LIST(GS_FIELD_COUNT_),
+    /* fields of gs_rig_state, the block's included (gs_rig_state_info) */
+    GS_RIG_STATE_FIELDS = 0 GS_BLOCK_STATE_LIST(GS_FIELD_COUNT_) GS_RIG_STATE_LIST(GS_FIELD_COUNT_)
+};
 
-/* What init chose for the contact integration, for the user to read. */
+/* The field tables, in member order: GS_RIG_INPUT_FIELDS, GS_RIG_OUTPUT_FIELDS
+ * and GS_RIG_STATE_FIELDS entries (the state's offsets are within
+ * gs_rig_state, block members first). */
+GS_API extern const gs_field_info gs_rig_input_info[];
+GS_API extern const gs_field_info gs_rig_output_info[];
+GS_API extern const gs_field_info gs_rig_state_info[];
+
+/* What init derives from the parameters (opaque; the layout is internal). A
+ * step only reads it: init once, then it may be const, shared by several
+ * states, or kept in flash as an image of an initialised rig. Its size is
+ * part of the ABI (GS_RIG_CONSTS_REALS reals). */
+#ifdef GS_SINGLE_PRECISION
+#define GS_RIG_CONSTS_REALS 195
+#else
+#define GS_RIG_CONSTS_REALS 188
+#endif
+typedef struct {
+    gs_real opaque_[GS_RIG_CONSTS_REALS];
+} gs_rig_consts;
+
+GS_API gs_rig_params gs_rig_params_default(void);
+
+/* What init chose for the contact integration, and the kinematics, for the
+ * user to read. */
 typedef struct {
     int contact_substeps;       /* sub-steps per step (1 without backlash) */
     gs_real contact_h_omega_n;  /* h*omega_n, omega_n = sqrt(K/m_eff): the contact's
@@ -157,38 +132,40 @@ typedef struct {
                                    and h*omega_n is still above 0.5: the contact is
                                    stable (backward Euler) but over-damped; lower dt or
                                    set contact_substeps */
+    gs_real follower_per_base;  /* follower speed per base speed of the rigid mesh:
+                                   s/g (rad/s per rad/s) or s_R*r_P (m/s per rad/s) */
 } gs_rig_info;
 
-/* Fills info for an initialised rig. */
-void gs_rig_get_info(const gs_rig *rig, gs_rig_info *info);
+/* Fills info for initialised constants. */
+GS_API void gs_rig_get_info(const gs_rig_consts *consts, gs_rig_info *info);
 
-/* Validate the block and rig parameters and fill rig. err names the failing
- * parameter (block names as in docs/physics.md; rig names e.g.
- * "follower_inertia", "rack_mass", "dt"). Never allocates. */
-gs_status gs_rig_init_gear(gs_rig *rig, const gs_simple_gear_params *gear,
-                           const gs_rig_params *params, gs_error *err);
-gs_status gs_rig_init_rack(gs_rig *rig, const gs_rack_pinion_params *rack,
-                           const gs_rig_params *params, gs_error *err);
+/* Validate the block and rig parameters, fill consts and set state to the
+ * initial state. err names the failing parameter (block names as in
+ * docs/physics.md; rig names e.g. "follower_inertia", "rack_mass", "dt").
+ * consts and state are left unchanged on failure. Never allocates. */
+GS_API gs_status gs_rig_init_gear(gs_rig_consts *consts, gs_rig_state *state,
+                                  const gs_simple_gear_params *gear, const gs_rig_params *params,
+                                  gs_error *err);
+GS_API gs_status gs_rig_init_rack(gs_rig_consts *consts, gs_rig_state *state,
+                                  const gs_rack_pinion_params *rack, const gs_rig_params *params,
+                                  gs_error *err);
 
-/* Back to the initial state (speeds, angles, temperature, backlash). */
-void gs_rig_reset(gs_rig *rig);
+/* Sets state to the initial state of consts (speeds, angles, temperature,
+ * backlash). */
+GS_API void gs_rig_reset(const gs_rig_consts *consts, gs_rig_state *state);
 
-/* Copies the state (speeds, angles, temperature, backlash, filters: what
- * gs_rig_reset sets) of `from` into `to`, keeping the constants of `to`. For
- * re-tuning a running rig: init a new rig from the new parameters, then copy
- * the old one's state into it. */
-void gs_rig_copy_state(gs_rig *to, const gs_rig *from);
-
-/* One fixed step of dt_s. Cannot fail; bounded cost per instance (fixed
- * sub-step and iteration counts). Inputs must be finite; the outputs are then
- * finite. Speed-driven: the first step after init/reset takes its base speed
- * as the initial state, with the follower geared to it (teeth moving
- * together, no acceleration); feed a zero-speed sample first to start at
- * rest. */
-void gs_rig_step(gs_rig *rig, const gs_rig_input *in, gs_rig_output *out);
+/* One fixed step of dt_s: reads consts, updates state. Cannot fail; bounded
+ * cost (fixed sub-step and iteration counts). Inputs must be finite; the
+ * outputs are then finite. Speed-driven: the first step after init/reset
+ * takes its base speed as the initial state, with the follower geared to it
+ * (teeth moving together, no acceleration); feed a zero-speed sample first to
+ * start at rest. */
+GS_API void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *state, const gs_rig_input *in,
+                        gs_rig_output *out);
 
 /* n steps over caller-owned arrays; bit-identical to n calls of gs_rig_step. */
-void gs_rig_run(gs_rig *rig, size_t n, const gs_rig_input *in, gs_rig_output *out);
+GS_API void gs_rig_run(const gs_rig_consts *consts, gs_rig_state *state, size_t n,
+                       const gs_rig_input *in, gs_rig_output *out);
 
 #ifdef __cplusplus
 }

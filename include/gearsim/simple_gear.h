@@ -50,10 +50,11 @@ typedef struct {
     gs_real initial_temperature_K;            /* (> 0), default 300 */
 } gs_simple_gear_params;
 
-/* The block: validated constants and state. Plain data (snapshot = copy). */
+/* What init derives from the parameters (opaque, see GS_BLOCK_CONSTS_REALS);
+ * the step only reads it. The state is a gs_block_state. */
 typedef struct {
-    gs_mesh_ mesh;
-} gs_simple_gear;
+    gs_real opaque_[GS_BLOCK_CONSTS_REALS];
+} gs_simple_gear_consts;
 
 /* Port inputs of one block step. Without backlash the mesh is rigid and the
  * step uses base_speed and follower_torque (causal form A of physics.md 8);
@@ -82,24 +83,24 @@ typedef struct {
 } gs_gear_ports_out;
 
 /* Defaults of every parameter (docs/physics.md section 9). Cost: O(table). */
-gs_simple_gear_params gs_simple_gear_params_default(void);
+GS_API gs_simple_gear_params gs_simple_gear_params_default(void);
 
-/* Validates params and fills gear (constants + initial state).
+/* Validates params, fills consts and sets state to the initial state.
  * Returns GS_OK or the status of the first rule broken; err (may be NULL)
- * receives the status, the parameter's program name and a message. gear is
- * left unchanged on failure. Never allocates. */
-gs_status gs_simple_gear_init(gs_simple_gear *gear, const gs_simple_gear_params *params,
-                              gs_error *err);
+ * receives the status, the parameter's program name and a message. consts
+ * and state are left unchanged on failure. Never allocates. */
+GS_API gs_status gs_simple_gear_init(gs_simple_gear_consts *consts, gs_block_state *state,
+                                     const gs_simple_gear_params *params, gs_error *err);
 
 /* Returns the state to its initial values (temperature, backlash position). */
-void gs_simple_gear_reset(gs_simple_gear *gear);
+GS_API void gs_simple_gear_reset(const gs_simple_gear_consts *consts, gs_block_state *state);
 
 /* Advances the block by dt_s (> 0): evaluates the port torques and integrates
  * the backlash position and temperature. Cannot fail; O(1). The backlash
  * position uses explicit Euler here; the rigs integrate the contact
  * implicitly and are what stiff contact should be stepped with. */
-void gs_simple_gear_step(gs_simple_gear *gear, gs_real dt_s, const gs_gear_ports_in *in,
-                         gs_gear_ports_out *out);
+GS_API void gs_simple_gear_step(const gs_simple_gear_consts *consts, gs_block_state *state,
+                                gs_real dt_s, const gs_gear_ports_in *in, gs_gear_ports_out *out);
 
 #ifdef __cplusplus
 }

@@ -1,24 +1,32 @@
 /*
  * gearsim/types.h - shared types of the gearsim C core.
  *
- * Real type, status codes, the validation error report, table capacities and
- * the option enums shared by both blocks. Sign convention and equations:
- * docs/physics.md (the reference; docs/model.md
- * in this repository records the choices made where it says "proposal").
+ * Real type, export macro, status codes, the validation error report, table
+ * capacity, the option enums shared by both blocks and the backlash
+ * parameters. Sign convention and equations: docs/physics.md.
  */
 #ifndef GEARSIM_TYPES_H
 #define GEARSIM_TYPES_H
 
 #include <stddef.h>
 
+#include "gearsim/fields.h"
+#include "gearsim/version.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-#define GS_VERSION_MAJOR 0
-#define GS_VERSION_MINOR 1
-#define GS_VERSION_PATCH 0
-#define GS_VERSION_STRING "0.1.0"
+/* Marks the public API. The library is built with hidden visibility, so only
+ * what carries GS_API is exported from the shared library. A consumer may
+ * predefine GS_API (e.g. empty). */
+#ifndef GS_API
+#if defined(__GNUC__) || defined(__clang__)
+#define GS_API __attribute__((visibility("default")))
+#else
+#define GS_API
+#endif
+#endif
 
 /* Real type: double by default; float when the library is built with the CMake
  * option GEARSIM_SINGLE_PRECISION (which defines GS_SINGLE_PRECISION for the
@@ -64,7 +72,11 @@ typedef enum {
 #define GS_STATUS_MIN GS_E_MAGNITUDE
 
 /* Returns a static, human-readable description of a status (never NULL). */
-const char *gs_status_str(gs_status status);
+GS_API const char *gs_status_str(gs_status status);
+
+/* The version of the built library (GS_VERSION_STRING when it was compiled):
+ * compare with the header's GS_VERSION_STRING to catch a stale library. */
+GS_API const char *gs_version(void);
 
 /* Filled by every *_init: which rule failed and for which parameter.
  * parameter is the program name of docs/physics.md section 9 (e.g.
@@ -119,82 +131,34 @@ typedef struct {
     gs_real contact_release_force_N;      /* f_th (>= 0, lock mode), default 0 */
 } gs_backlash_params;
 
-/* ---- Internal model state. Plain data, no pointers: copying a model or rig
- * is a snapshot, copying it back restores it. Read the outputs, not these. */
+/* The state of a block's mesh (gearsim/fields.h GS_BLOCK_STATE_LIST): plain
+ * data, a snapshot is a copy of it. *_init and *_reset set it; the step
+ * updates it. */
 typedef struct {
-    gs_real x[GS_TABLE_MAX];
-    gs_real y[GS_TABLE_MAX];
-    int n;
-} gs_table1_;
+    GS_BLOCK_STATE_LIST(GS_FIELD_MEMBER_)
+} gs_block_state;
 
+/* One entry of the run-time field tables (gs_rig_input_info, ...): what
+ * gearsim/fields.h declares, with the member's offset for generic access. */
 typedef struct {
-    gs_real x[GS_TABLE_MAX];       /* rows: temperature, K */
-    gs_real y[GS_TABLE_MAX];       /* columns: base load, N*m */
-    gs_real z[GS_TABLE_MAX][GS_TABLE_MAX];
-    int nx;
-    int ny;
-} gs_table2_;
+    const char *name;      /* the field's name in every layer */
+    const char *gear_unit; /* unit in the Simple Gear rig (pint syntax) */
+    const char *rack_unit; /* unit in the Rack & Pinion rig */
+    const char *doc;       /* one-line description */
+    size_t offset;         /* byte offset of the member in its struct */
+    int is_integer;        /* 1: an int member, 0: a gs_real member */
+} gs_field_info;
 
-/* The mesh shared by both blocks: omega_B = ratio * omega_F, where ratio =
- * s*g (Simple Gear) or s_R/r_P (Rack & Pinion, follower = rack). */
-typedef struct {
-    /* constants */
-    gs_real ratio;              /* omega_B / omega_F (signed) */
-    gs_real inv_ratio;          /* omega_F / omega_B */
-    gs_real base_radius;        /* r_B or r_P, m (backlash geometry) */
-    gs_real follower_radius;    /* r_F (m) or 1 for the rack */
-    gs_real direction;          /* s or s_R, +1 or -1 */
-    gs_real mu_base;            /* viscous, N*m/(rad/s) */
-    gs_real mu_follower;        /* viscous, N*m/(rad/s) or N/(m/s) */
-    gs_friction_model friction;
-    gs_loss_smoothing smoothing;
-    gs_real eta;                /* constant efficiency */
-    gs_real power_threshold;    /* W */
-    gs_real inv_power_threshold;
-    gs_real coulomb_idle;       /* g*tau_idle, follower-referred, N*m */
-    gs_real load_slope;         /* k of eq. 2.5 */
-    gs_real inv_speed_threshold;/* 1/omega_th */
-    gs_real base_load_scale;    /* |T_F| -> base load: 1/g */
-    gs_table1_ eta_of_T;
-    gs_table2_ eta_of_T_load;
-    int thermal_enabled;
-    gs_real thermal_mass;       /* J/K */
-    gs_real initial_temperature;/* K */
-    /* backlash constants */
-    int backlash;
-    gs_hard_stop_model hard_stop;
-    gs_real half_gap;           /* b/2, m */
-    gs_real inv_transition;     /* 1/d */
-    gs_real stiffness;
-    gs_real damping;
-    gs_real initial_position;
-    int no_pull;
-    int lock_enabled;
-    gs_real lock_speed;
-    gs_real lock_release_force;
-    /* state */
-    gs_real temperature;        /* T_th, K */
-    gs_real position;           /* x, m */
-    gs_real contact_force;      /* last f, N */
-    gs_real last_follower_torque; /* T_F of the last step (linearisation seed) */
-    int locked;
-} gs_mesh_;
-
-/* Constants of the backward-Euler contact for one sub-step length
- * (src/hard_stop.c), computed at init so that the step path divides little. */
-typedef struct {
-    gs_real h;                   /* sub-step, s */
-    gs_real inv_h;               /* 1/h, 1/s */
-    gs_real c;                   /* h/m_eff, s/kg */
-    gs_real inv_c;               /* m_eff/h, kg/s */
-    gs_real c_stiffness;         /* c*K, 1/s */
-    gs_real inv_affine_damped;   /* 1/(1 + c*(K*h + D)) */
-    gs_real inv_affine_undamped; /* 1/(1 + c*K*h) */
-    gs_real draw_dv;             /* K*h + D: d(K*delta + D*v)/dv, N*s/m */
-    gs_real dxi_dv;              /* h/d: d(delta/d)/dv for the smooth law, s/m */
-    gs_real transition;          /* d, m (smooth law) */
-    int law_force_conditioned;   /* kappa = c*(K*h + D) < 1: the law may give the root's force */
-} gs_contact_step_;
+/* Storage of the constants a block's init derives (opaque: the layout is
+ * internal and may change between versions; the size is part of the ABI).
+ * Plain data without pointers: init once, then read-only, so it may be
+ * const-qualified, copied, or placed in flash as an image of an initialised
+ * block (same precision and target ABI). */
+#ifdef GS_SINGLE_PRECISION
+#define GS_BLOCK_CONSTS_REALS 152
+#else
+#define GS_BLOCK_CONSTS_REALS 148
+#endif
 
 #ifdef __cplusplus
 }
