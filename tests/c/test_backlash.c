@@ -74,7 +74,7 @@ static void run_block_contact(gs_hard_stop_model m, int no_pull, int lower)
 {
     const double g = 2.0, rB = 0.05, b = 1e-3, K = 1e5, D = 200.0, dt = 1e-3, wF = 0.1;
     gs_simple_gear_params gp = backlash_gear(g, GS_ROTATES_OPPOSITE, m, b, rB, K, D);
-    gs_simple_gear gear;
+    test_gear gear;
     gs_gear_ports_in in;
     gs_gear_ports_out out;
     const double s = -1.0, rF = g * rB;
@@ -100,7 +100,7 @@ static void run_block_contact(gs_hard_stop_model m, int no_pull, int lower)
         in.follower_speed_rad_s = R(wF);
         in.base_speed_rad_s = R((v_cmd + s * rF * wF) / rB);
         v = rB * (double)in.base_speed_rad_s - s * rF * (double)in.follower_speed_rad_s;
-        gs_simple_gear_step(&gear, R(dt), &in, &out);
+        gs_simple_gear_step(&gear.c, &gear.s, R(dt), &in, &out);
         x_after = (double)out.backlash_position_m;
         ASSERT_NEAR(x_after, x_before + dt * v, 0.0, 8.0 * GS_EPS * b);
         f_before = contact_law(m, no_pull, Kd, Dd, d, hb, x_before, v);
@@ -171,7 +171,7 @@ static void test_lost_motion_gear(void **state)
         gs_simple_gear_params gp =
             backlash_gear(g, rots[ir], GS_HARD_STOP_FULL_DAMPED, b, rB, 1e6, 1e3);
         gs_rig_params rp = gs_rig_params_default();
-        gs_rig rig;
+        test_rig rig;
         gs_rig_output out;
         const double s = gear_sign(rots[ir]);
         const double t_contact = 0.1005;
@@ -190,32 +190,32 @@ static void test_lost_motion_gear(void **state)
          * rig.c): start from rest, then hold omega_B from t = 0 */
         {
             const gs_rig_input rest = rig_speed_input(0.0, 0.0);
-            gs_rig_step(&rig, &rest, &out);
+            gs_rig_step(&rig.c, &rig.s, &rest, &out);
             ASSERT_NEAR(out.follower_speed, 0.0, 0.0, 0.0);
-            ASSERT_NEAR(out.backlash_position_m, 0.0, 0.0, 0.0);
+            ASSERT_NEAR(out.backlash_position, 0.0, 0.0, 0.0);
         }
         in = rig_speed_input(wB, 0.0);
-        v = rB * (double)in.base_speed_rad_s; /* the follower rests */
+        v = rB * (double)in.base_speed; /* the follower rests */
         for (k = 1; k <= 400; ++k) {
-            gs_rig_step(&rig, &in, &out);
+            gs_rig_step(&rig.c, &rig.s, &in, &out);
             assert_true(rig_output_finite(&out));
             if (k_contact < 0) {
-                if (!is_zero((double)out.contact_force_N) || !is_zero((double)out.follower_speed)) {
+                if (!is_zero((double)out.contact_force) || !is_zero((double)out.follower_speed)) {
                     k_contact = k;
                 } else if (k >= 2) {
                     /* free play: x advances by v*dt, nothing moves the follower */
-                    ASSERT_NEAR((double)out.backlash_position_m - x_prev, v * dt, 1e-9,
+                    ASSERT_NEAR((double)out.backlash_position - x_prev, v * dt, 1e-9,
                                 8.0 * GS_EPS * b);
-                    ASSERT_NEAR(out.contact_energy_J, 0.0, 0.0, 0.0);
-                    ASSERT_NEAR(out.base_port_torque_Nm, 0.0, 0.0, 0.0);
+                    ASSERT_NEAR(out.contact_energy, 0.0, 0.0, 0.0);
+                    ASSERT_NEAR(out.base_port_torque, 0.0, 0.0, 0.0);
                 }
             }
-            x_prev = (double)out.backlash_position_m;
+            x_prev = (double)out.backlash_position;
         }
         assert_contact_step("lost motion", k_contact, dt, t_contact);
         /* afterwards the base carries the follower: omega_F = s*omega_B/g */
         ASSERT_NEAR(out.follower_speed, s * wB / g, 1e-3, 0.0);
-        assert_true((double)out.backlash_position_m > b / 2.0 - 1e-5);
+        assert_true((double)out.backlash_position > b / 2.0 - 1e-5);
     }
 }
 
@@ -227,7 +227,7 @@ static void test_lost_motion_rack(void **state)
     for (id = 0; id < 2; ++id) {
         gs_rack_pinion_params pp = gs_rack_pinion_params_default();
         gs_rig_params rp = gs_rig_params_default();
-        gs_rig rig;
+        test_rig rig;
         gs_rig_output out;
         const double r = 0.05, b = 1e-3, t_contact = 0.0805;
         const double wP = (b / 2.0) / (r * t_contact);
@@ -250,14 +250,14 @@ static void test_lost_motion_rack(void **state)
         dt = (double)rp.dt_s;
         {
             const gs_rig_input rest = rig_speed_input(0.0, 0.0);
-            gs_rig_step(&rig, &rest, &out);
+            gs_rig_step(&rig.c, &rig.s, &rest, &out);
         }
         in = rig_speed_input(wP, 0.0);
         for (k = 1; k <= 400; ++k) {
-            gs_rig_step(&rig, &in, &out);
+            gs_rig_step(&rig.c, &rig.s, &in, &out);
             assert_true(rig_output_finite(&out));
             if (k_contact < 0 &&
-                (!is_zero((double)out.contact_force_N) || !is_zero((double)out.follower_speed)))
+                (!is_zero((double)out.contact_force) || !is_zero((double)out.follower_speed)))
                 k_contact = k;
         }
         assert_contact_step("rack lost motion", k_contact, dt, t_contact);
@@ -279,7 +279,7 @@ static impact_result impact(gs_hard_stop_model m, double D, int no_pull, int sub
     const double g = 2.0, rB = 0.1, b = 1e-3, K = 1e4, JF = 0.01, pulse = 0.1;
     gs_simple_gear_params gp = backlash_gear(g, GS_ROTATES_SAME, m, b, rB, K, D);
     gs_rig_params rp = gs_rig_params_default();
-    gs_rig rig;
+    test_rig rig;
     gs_rig_output out;
     impact_result res = {0.0, 0};
     const double s = 1.0, rF = g * rB;
@@ -295,11 +295,11 @@ static impact_result impact(gs_hard_stop_model m, double D, int no_pull, int sub
         const double load = k <= 5 ? pulse : 0.0;
         const gs_rig_input in = rig_speed_input(0.0, load);
         double w, f, x;
-        gs_rig_step(&rig, &in, &out);
+        gs_rig_step(&rig.c, &rig.s, &in, &out);
         assert_true(rig_output_finite(&out));
         w = (double)out.follower_speed;
-        f = (double)out.contact_force_N;
-        x = (double)out.backlash_position_m;
+        f = (double)out.contact_force;
+        x = (double)out.backlash_position;
         /* Newton on the follower: J*dw/dt = load - tau_F, tau_F = -s*r_F*f */
         {
             const double scale = fabs(load) + rF * fabs(f) + 1e-6;
@@ -325,7 +325,7 @@ static impact_result impact(gs_hard_stop_model m, double D, int no_pull, int sub
         }
         if (k > 20 && is_zero(D)) {
             /* conservative contact: nothing may be created */
-            ASSERT_LE(0.5 * JF * w * w + (double)out.contact_energy_J, ke_before,
+            ASSERT_LE(0.5 * JF * w * w + (double)out.contact_energy, ke_before,
                       TOL_ENERGY * ke_before + 1e-15);
         }
         if (contact == 1 && is_zero(f) && x > -b / 2.0) {
@@ -396,7 +396,7 @@ static void run_stiff(gs_hard_stop_model m, int substeps, double load_amp)
     const double g = 2.0, rB = 0.1, b = 1e-3, JF = 1e-4, W = 10.0;
     gs_simple_gear_params gp = backlash_gear(g, GS_ROTATES_OPPOSITE, m, b, rB, 1e8, 1e4);
     gs_rig_params rp = gs_rig_params_default();
-    gs_rig rig;
+    test_rig rig;
     gs_rig_output out;
     const double s = -1.0, rF = g * rB;
     double dt, w_prev = 0.0, e_prev = 0.0, f_prev = 0.0;
@@ -412,21 +412,21 @@ static void run_stiff(gs_hard_stop_model m, int substeps, double load_amp)
         const double load = load_amp * sin(2.0 * TEST_PI * 0.7 * t);
         const gs_rig_input in = rig_speed_input(W * sin(2.0 * TEST_PI * 2.0 * t), load);
         double w, f, e;
-        gs_rig_step(&rig, &in, &out);
+        gs_rig_step(&rig.c, &rig.s, &in, &out);
         assert_true(rig_output_finite(&out));
         w = (double)out.follower_speed;
-        f = (double)out.contact_force_N;
-        e = (double)out.contact_energy_J;
-        if (!(fabs((double)out.backlash_position_m) <= b / 2.0 + 1e-5) ||
+        f = (double)out.contact_force;
+        e = (double)out.contact_energy;
+        if (!(fabs((double)out.backlash_position) <= b / 2.0 + 1e-5) ||
             (is_zero(load_amp) && !(fabs(w) <= 2.0 * W / g * (1.0 + 1e-6))))
             print_error("stiff contact, hard stop %d, substeps %d, load amplitude %g, step %d: "
                         "x %.9g m (prev. E %.6g J), f %.9g N, omega_B %.6g, omega_F %.6g -> %.6g, "
                         "E %.6g J\n",
-                        (int)m, substeps, load_amp, k, (double)out.backlash_position_m, e_prev, f,
-                        (double)out.base_speed_rad_s, w_prev, w, e);
+                        (int)m, substeps, load_amp, k, (double)out.backlash_position, e_prev, f,
+                        (double)out.base_speed, w_prev, w, e);
         if (is_zero(load_amp))
             ASSERT_LE(fabs(w), 2.0 * W / g, 1e-6 * W);
-        ASSERT_LE(fabs((double)out.backlash_position_m), b / 2.0 + 1e-5, 0.0);
+        ASSERT_LE(fabs((double)out.backlash_position), b / 2.0 + 1e-5, 0.0);
         {
             const double scale = fabs(load) + rF * fabs(f) + 1e-6;
             ASSERT_NEAR(JF * (w - w_prev) / dt, load + s * rF * f, dmax(1e-6, TOL_REL),
@@ -434,12 +434,12 @@ static void run_stiff(gs_hard_stop_model m, int substeps, double load_amp)
         }
         {
             const double gross =
-                (fabs((double)out.base_port_torque_Nm * (double)out.base_speed_rad_s) +
+                (fabs((double)out.base_port_torque * (double)out.base_speed) +
                  fabs((double)out.follower_port_torque * w)) *
                 dt;
             /* + rounding of the stored energy: x is known to ~eps*b, so E to
              * ~|f|*eps*b (negligible in double, ~1e-11 J in float here) */
-            ASSERT_LE((double)out.loss_power_W * dt + (e - e_prev), (double)out.port_power_W * dt,
+            ASSERT_LE((double)out.loss_power * dt + (e - e_prev), (double)out.port_power * dt,
                       TOL_ENERGY * (gross + e + e_prev) + 1e-15 +
                           4.0 * GS_EPS * b * (fabs(f) + fabs(f_prev)));
         }
@@ -474,9 +474,9 @@ static void check_backward_euler_step(be_check *c, const gs_rig_output *out, int
 #else
     const double rtol = 1e-8;
 #endif
-    const double x1 = (double)out->backlash_position_m;
+    const double x1 = (double)out->backlash_position;
     const double u = (x1 - c->x0) / c->dt;
-    const double f = (double)out->contact_force_N;
+    const double f = (double)out->contact_force;
     const double law = contact_law(c->model, 1, c->K, c->D, c->d, c->hb, x1, u);
     const double pen = fabs(x1) - c->hb;
     const double atol = rtol * (fabs(f) + 1.0) + 2.0 * GS_EPS * c->hb * (c->K + c->D / c->dt);
@@ -503,7 +503,7 @@ static void run_backward_euler_residual(gs_hard_stop_model m)
     const double g = 2.0, rB = 0.1, b = 1e-3, K = 1e6, D = 1e3, d = 2e-5, dt = 1e-3;
     gs_simple_gear_params gp = backlash_gear(g, GS_ROTATES_OPPOSITE, m, b, rB, K, D);
     gs_rig_params rp = gs_rig_params_default();
-    gs_rig rig;
+    test_rig rig;
     gs_rig_output out;
     be_check c = {m, K, D, d, b / 2.0, dt, 0.0, 0, 0, 0};
     int k, trial;
@@ -517,17 +517,17 @@ static void run_backward_euler_residual(gs_hard_stop_model m)
         const gs_rig_input in = rig_speed_input(
             20.0 * sin(2.0 * TEST_PI * 0.5 * t) + 4.0 * sin(2.0 * TEST_PI * 1.25 * t),
             2.0 + 6.0 * sin(2.0 * TEST_PI * 0.25 * t + 0.3));
-        gs_rig_step(&rig, &in, &out);
+        gs_rig_step(&rig.c, &rig.s, &in, &out);
         check_backward_euler_step(&c, &out, k);
     }
     /* free impacts from the centre at 64 closing speeds: the edge is reached
      * at every fraction of a step, so the full laws' jump is hit too */
     for (trial = 0; trial < 64; ++trial) {
-        gs_rig_reset(&rig);
+        gs_rig_reset(&rig.c, &rig.s);
         c.x0 = 0.0;
         for (k = 0; k < 40; ++k) {
             const gs_rig_input in = rig_speed_input(k == 0 ? 0.0 : 0.3 + 0.05 * trial, 0.0);
-            gs_rig_step(&rig, &in, &out);
+            gs_rig_step(&rig.c, &rig.s, &in, &out);
             check_backward_euler_step(&c, &out, k);
         }
     }
@@ -570,18 +570,18 @@ static double steady_block_follower_torque(gs_friction_model model, double eta, 
     g.efficiency_nominal = R(0.8);
     g.backlash.enabled = 1;
     g.backlash.damping_N_s_m = R(0.0);
-    gs_simple_gear gear;
+    test_gear gear;
     INIT_GEAR(&gear, &g);
     gs_gear_ports_out out;
     /* close the gap: the base tooth advances 0.1 m/s against a held follower */
     for (int k = 0; k < 7; ++k) {
         const gs_gear_ports_in in = {R(1.0), R(0.0), R(0.0), R(0.0), R(300.0), 0};
-        gs_simple_gear_step(&gear, R(1e-3), &in, &out);
+        gs_simple_gear_step(&gear.c, &gear.s, R(1e-3), &in, &out);
     }
     /* then turn together (v = r_B*w_B - s*r_F*w_F = 0): x and f stay put */
     for (int k = 0; k < 5; ++k) {
         const gs_gear_ports_in in = {(gs_real)w_b, (gs_real)(-w_b / 2.0), R(0.0), R(0.0), R(300.0), 0};
-        gs_simple_gear_step(&gear, R(1e-3), &in, &out);
+        gs_simple_gear_step(&gear.c, &gear.s, R(1e-3), &in, &out);
     }
     *contact_force = (double)out.contact_force_N;
     *base_torque = (double)out.base_torque_Nm;
@@ -634,16 +634,16 @@ static void test_rack_block_steady_contact_rigid_forces(void **state)
             pp.efficiency_const = (gs_real)etas[i];
             pp.backlash.enabled = 1;
             pp.backlash.damping_N_s_m = R(0.0);
-            gs_rack_pinion rp;
+            test_rack rp;
             INIT_RACK(&rp, &pp);
             gs_rack_ports_out out;
             for (int k = 0; k < 7; ++k) { /* close the gap: 0.1 m/s against a held rack */
                 const gs_rack_ports_in in = {R(1.0), R(0.0), R(0.0), R(0.0), R(300.0), 0};
-                gs_rack_pinion_step(&rp, R(1e-3), &in, &out);
+                gs_rack_pinion_step(&rp.c, &rp.s, R(1e-3), &in, &out);
             }
             for (int k = 0; k < 5; ++k) { /* then move together: v = r_P*w_P - v_R = 0 */
                 const gs_rack_ports_in in = {(gs_real)w_p, (gs_real)(0.1 * w_p), R(0.0), R(0.0), R(300.0), 0};
-                gs_rack_pinion_step(&rp, R(1e-3), &in, &out);
+                gs_rack_pinion_step(&rp.c, &rp.s, R(1e-3), &in, &out);
             }
             const double f = (double)out.contact_force_N;
             const double f0 = -f;
@@ -677,7 +677,7 @@ static void test_lock_never_engages_while_separating(void **state)
     rp.base_inertia_kg_m2 = GS_R(0.01);
     rp.driven_inertia = GS_R(0.001);
     rp.contact_substeps = 1;
-    gs_rig rig;
+    test_rig rig;
     INIT_GEAR_RIG(&rig, &g, &rp);
     const double half_gap = 0.5 * (double)g.backlash.linear_backlash_m;
     int engaged = 0;
@@ -686,11 +686,11 @@ static void test_lock_never_engages_while_separating(void **state)
         gs_rig_input in = {GS_R(0.0), (gs_real)(0.2 * sin(2.0 * TEST_PI * 3.0 * t)),
                            (gs_real)(0.1 * sin(2.0 * TEST_PI * 5.0 * t + 1.0)), GS_R(293.15), GS_R(293.15)};
         gs_rig_output out;
-        const int locked_before = rig.mesh.locked;
-        const double x0 = (double)rig.mesh.position;
-        gs_rig_step(&rig, &in, &out);
-        if (!locked_before && rig.mesh.locked) {
-            const double x1 = (double)rig.mesh.position;
+        const int locked_before = rig.s.block.contact_locked;
+        const double x0 = (double)rig.s.block.backlash_position;
+        gs_rig_step(&rig.c, &rig.s, &in, &out);
+        if (!locked_before && rig.s.block.contact_locked) {
+            const double x1 = (double)rig.s.block.backlash_position;
             ++engaged;
             if (!(fabs(x1) >= half_gap * (1.0 - 1e-6) && x1 * (x1 - x0) >= 0.0)) {
                 fail_msg("step %d: lock engaged with x %.9g -> %.9g (separating or inside the gap)", k, x0, x1);
@@ -712,10 +712,10 @@ static void check_info(double stiffness, double follower_inertia, int substeps_p
     gs_rig_params rp = gs_rig_params_default();
     rp.driven_inertia = (gs_real)follower_inertia;
     rp.contact_substeps = substeps_param;
-    gs_rig rig;
+    test_rig rig;
     INIT_GEAR_RIG(&rig, &g, &rp);
     gs_rig_info info;
-    gs_rig_get_info(&rig, &info);
+    gs_rig_get_info(&rig.c, &info);
     const double r_f = (double)g.teeth_ratio * (double)g.backlash.base_radius_m;
     const double h = (double)rp.dt_s / (double)expect_n;
     const double h_omega_n = h * sqrt(stiffness * r_f * r_f / follower_inertia);
@@ -736,10 +736,10 @@ static void test_rig_info(void **state)
     /* rigid: one step, nothing to resolve */
     gs_simple_gear_params g = gs_simple_gear_params_default();
     gs_rig_params rp = gs_rig_params_default();
-    gs_rig rig;
+    test_rig rig;
     INIT_GEAR_RIG(&rig, &g, &rp);
     gs_rig_info info;
-    gs_rig_get_info(&rig, &info);
+    gs_rig_get_info(&rig.c, &info);
     assert_int_equal(info.contact_substeps, 1);
     assert_int_equal(info.substeps_capped, 0);
     assert_true(!(info.contact_h_omega_n > GS_R(0.0)) && !(info.contact_h_omega_n < GS_R(0.0)));

@@ -163,17 +163,36 @@ static inline void report_init_failure(const char *what, gs_status st, const gs_
             report_init_failure(#init, st_, &err_, __FILE__, __LINE__);   \
     } while (0)
 
-#define INIT_GEAR_RIG(rig, gp, rp) INIT_OK(gs_rig_init_gear, (rig), (gp), (rp))
-#define INIT_RACK_RIG(rig, pp, rp) INIT_OK(gs_rig_init_rack, (rig), (pp), (rp))
-#define INIT_GEAR(gear, gp) INIT_OK(gs_simple_gear_init, (gear), (gp))
-#define INIT_RACK(rp_, pp) INIT_OK(gs_rack_pinion_init, (rp_), (pp))
+/* A rig or block in the tests: the constants init derives (read-only
+ * afterwards) and the state a step updates, side by side. The API takes
+ * them apart: gs_rig_step(&rig.c, &rig.s, ...); a snapshot is a copy of .s. */
+typedef struct {
+    gs_rig_consts c;
+    gs_rig_state s;
+} test_rig;
+
+typedef struct {
+    gs_simple_gear_consts c;
+    gs_block_state s;
+} test_gear;
+
+typedef struct {
+    gs_rack_pinion_consts c;
+    gs_block_state s;
+} test_rack;
+
+/* Each takes a pointer to a test_rig / test_gear / test_rack. */
+#define INIT_GEAR_RIG(rig, gp, rp) INIT_OK(gs_rig_init_gear, &(rig)->c, &(rig)->s, (gp), (rp))
+#define INIT_RACK_RIG(rig, pp, rp) INIT_OK(gs_rig_init_rack, &(rig)->c, &(rig)->s, (pp), (rp))
+#define INIT_GEAR(gear, gp) INIT_OK(gs_simple_gear_init, &(gear)->c, &(gear)->s, (gp))
+#define INIT_RACK(rp_, pp) INIT_OK(gs_rack_pinion_init, &(rp_)->c, &(rp_)->s, (pp))
 
 static inline gs_rig_input rig_input_blank(void)
 {
     gs_rig_input in;
     memset(&in, 0, sizeof in);
-    in.ambient_temperature_K = R(300.0);
-    in.measured_temperature_K = R(300.0);
+    in.ambient_temperature = R(300.0);
+    in.measured_temperature = R(300.0);
     return in;
 }
 
@@ -181,7 +200,7 @@ static inline gs_rig_input rig_input_blank(void)
 static inline gs_rig_input rig_speed_input(double base_speed, double load)
 {
     gs_rig_input in = rig_input_blank();
-    in.base_speed_rad_s = R(base_speed);
+    in.base_speed = R(base_speed);
     in.load = R(load);
     return in;
 }
@@ -189,7 +208,7 @@ static inline gs_rig_input rig_speed_input(double base_speed, double load)
 static inline gs_rig_input rig_torque_input(double motor_torque, double load)
 {
     gs_rig_input in = rig_input_blank();
-    in.base_torque_Nm = R(motor_torque);
+    in.base_torque = R(motor_torque);
     in.load = R(load);
     return in;
 }

@@ -4,11 +4,11 @@
  *
  *   sum(port powers) = P_loss + dE_stored/dt,   P_loss >= 0.
  *
- * Rigid mesh (no stored energy): port_power_W == loss_power_W to rounding,
- * and port_power_W == tau_B*omega_B + tau_F*omega_F from the outputs.
+ * Rigid mesh (no stored energy): port_power == loss_power to rounding,
+ * and port_power == tau_B*omega_B + tau_F*omega_F from the outputs.
  * Backlash: the stored energy is the contact spring's; the implicit contact
  * integration may only dissipate, so on every step
- *   port_power_W*dt >= loss_power_W*dt + (E_n - E_{n-1}) - rounding.
+ *   port_power*dt >= loss_power*dt + (E_n - E_{n-1}) - rounding.
  * Operating points come from a seeded xorshift64 generator (test_common.h):
  * speeds and loads jump, hold, reverse and dwell near zero, inside and far
  * outside the smoothing thresholds.
@@ -99,22 +99,22 @@ static gs_rig_input walk_input(gs_base_drive drive, const walk *w)
 
 static void check_rigid_step(const gs_rig_output *o, gs_base_drive drive, int passive)
 {
-    const double gross = fabs((double)o->base_port_torque_Nm * (double)o->base_speed_rad_s) +
+    const double gross = fabs((double)o->base_port_torque * (double)o->base_speed) +
                          fabs((double)o->follower_port_torque * (double)o->follower_speed);
     assert_true(rig_output_finite(o));
     if (passive) {
-        assert_true((double)o->mesh_loss_power_W >= 0.0);
-        assert_true((double)o->loss_power_W >= 0.0);
-        ASSERT_LE(o->mesh_loss_power_W, o->loss_power_W, TOL_REL * gross + 1e-15);
+        assert_true((double)o->mesh_loss_power >= 0.0);
+        assert_true((double)o->loss_power >= 0.0);
+        ASSERT_LE(o->mesh_loss_power, o->loss_power, TOL_REL * gross + 1e-15);
     }
-    ASSERT_NEAR(o->port_power_W, o->loss_power_W, 0.0, TOL_REL * gross + 1e-12);
+    ASSERT_NEAR(o->port_power, o->loss_power, 0.0, TOL_REL * gross + 1e-12);
     if (drive == GS_BASE_SPEED_DRIVEN) {
         /* port power = tau_B*omega_B + tau_F*omega_F of the same step */
-        const double pp = (double)o->base_port_torque_Nm * (double)o->base_speed_rad_s +
+        const double pp = (double)o->base_port_torque * (double)o->base_speed +
                           (double)o->follower_port_torque * (double)o->follower_speed;
-        ASSERT_NEAR(o->port_power_W, pp, 0.0, TOL_REL * gross + 1e-12);
+        ASSERT_NEAR(o->port_power, pp, 0.0, TOL_REL * gross + 1e-12);
     }
-    ASSERT_NEAR(o->contact_energy_J, 0.0, 0.0, 0.0); /* rigid: nothing stored */
+    ASSERT_NEAR(o->contact_energy, 0.0, 0.0, 0.0); /* rigid: nothing stored */
 }
 
 static void run_random_rigid_gear(gs_friction_model fm, gs_output_rotation rot,
@@ -124,7 +124,7 @@ static void run_random_rigid_gear(gs_friction_model fm, gs_output_rotation rot,
     const double g = rng_range(&rng, 0.4, 4.0);
     gs_simple_gear_params gp = lossy_gear(fm, rot, sm, g);
     gs_rig_params rp = lossy_rig(drive);
-    gs_rig rig;
+    test_rig rig;
     gs_rig_output out;
     walk w = {0.0, 0.0, 0};
     double max_loss = 0.0;
@@ -134,10 +134,10 @@ static void run_random_rigid_gear(gs_friction_model fm, gs_output_rotation rot,
         gs_rig_input in;
         walk_next(&rng, &w, drive == GS_BASE_SPEED_DRIVEN ? 30.0 : 1.5, 8.0, 40);
         in = walk_input(drive, &w);
-        in.ambient_temperature_K = R(rng_range(&rng, 290.0, 310.0));
-        gs_rig_step(&rig, &in, &out);
+        in.ambient_temperature = R(rng_range(&rng, 290.0, 310.0));
+        gs_rig_step(&rig.c, &rig.s, &in, &out);
         check_rigid_step(&out, drive, sm == GS_SMOOTHING_PASSIVE);
-        max_loss = dmax(max_loss, (double)out.loss_power_W);
+        max_loss = dmax(max_loss, (double)out.loss_power);
     }
     assert_true(max_loss > 0.1); /* the scenario does dissipate */
 }
@@ -181,7 +181,7 @@ static void run_random_rigid_rack(gs_friction_model fm, gs_rack_direction dir, g
     test_rng rng = rng_seed(seed);
     gs_rack_pinion_params pp = gs_rack_pinion_params_default();
     gs_rig_params rp = lossy_rig(drive);
-    gs_rig rig;
+    test_rig rig;
     gs_rig_output out;
     walk w = {0.0, 0.0, 0};
     double max_loss = 0.0;
@@ -203,9 +203,9 @@ static void run_random_rigid_rack(gs_friction_model fm, gs_rack_direction dir, g
         gs_rig_input in;
         walk_next(&rng, &w, drive == GS_BASE_SPEED_DRIVEN ? 30.0 : 1.5, 80.0, 40);
         in = walk_input(drive, &w);
-        gs_rig_step(&rig, &in, &out);
+        gs_rig_step(&rig.c, &rig.s, &in, &out);
         check_rigid_step(&out, drive, 1);
-        max_loss = dmax(max_loss, (double)out.loss_power_W);
+        max_loss = dmax(max_loss, (double)out.loss_power);
     }
     assert_true(max_loss > 0.1);
 }
@@ -227,29 +227,29 @@ static void test_random_rigid_rack(void **state)
 static void check_backlash_step(const gs_rig_output *o, double e_prev, double f_prev, double dt,
                                 int step, const char *label)
 {
-    const double e = (double)o->contact_energy_J;
-    const double gross = (fabs((double)o->base_port_torque_Nm * (double)o->base_speed_rad_s) +
+    const double e = (double)o->contact_energy;
+    const double gross = (fabs((double)o->base_port_torque * (double)o->base_speed) +
                           fabs((double)o->follower_port_torque * (double)o->follower_speed)) *
                          dt;
     /* rounding slack: the energies' own scale, and the stored energy's
      * sensitivity to the rounding of x (~|f|*eps*b, b = 1e-3 m here) */
-    const double tol = TOL_ENERGY * (gross + fabs((double)o->loss_power_W) * dt + e + e_prev) +
+    const double tol = TOL_ENERGY * (gross + fabs((double)o->loss_power) * dt + e + e_prev) +
                        1e-15 +
-                       4.0 * GS_EPS * 1e-3 * (fabs((double)o->contact_force_N) + fabs(f_prev));
-    const double lhs = (double)o->loss_power_W * dt + (e - e_prev);
-    const double rhs = (double)o->port_power_W * dt;
+                       4.0 * GS_EPS * 1e-3 * (fabs((double)o->contact_force) + fabs(f_prev));
+    const double lhs = (double)o->loss_power * dt + (e - e_prev);
+    const double rhs = (double)o->port_power * dt;
     /* the contact's share of the loss, (f - f_spring)*u, comes from an
      * impulse balance: allow rounding relative to the power through the ports */
     const double loss_floor = -TOL_ENERGY * gross / dt;
-    if (!rig_output_finite(o) || !((double)o->loss_power_W >= loss_floor) ||
-        !((double)o->mesh_loss_power_W >= 0.0) || !(e >= 0.0) || !(lhs <= rhs + tol)) {
+    if (!rig_output_finite(o) || !((double)o->loss_power >= loss_floor) ||
+        !((double)o->mesh_loss_power >= 0.0) || !(e >= 0.0) || !(lhs <= rhs + tol)) {
         print_error("%s, step %d: loss %.9g W, mesh loss %.9g W, port %.9g W, E %.9g -> %.9g J, "
                     "loss*dt + dE - port*dt = %.3g J (tol %.3g), x = %.9g m, f = %.9g N, "
                     "omega_B %.6g, omega_F %.6g\n",
-                    label, step, (double)o->loss_power_W, (double)o->mesh_loss_power_W,
-                    (double)o->port_power_W, e_prev, e, lhs - rhs, tol,
-                    (double)o->backlash_position_m, (double)o->contact_force_N,
-                    (double)o->base_speed_rad_s, (double)o->follower_speed);
+                    label, step, (double)o->loss_power, (double)o->mesh_loss_power,
+                    (double)o->port_power, e_prev, e, lhs - rhs, tol,
+                    (double)o->backlash_position, (double)o->contact_force,
+                    (double)o->base_speed, (double)o->follower_speed);
         fail();
     }
 }
@@ -272,7 +272,7 @@ static void run_random_backlash(backlash_case c, uint64_t seed)
     test_rng rng = rng_seed(seed);
     gs_rig_params rp = lossy_rig(c.drive);
     gs_backlash_params bl;
-    gs_rig rig;
+    test_rig rig;
     gs_rig_output out;
     walk w = {0.0, 0.0, 0};
     double e_prev, f_prev = 0.0, dt, max_e = 0.0;
@@ -327,10 +327,10 @@ static void run_random_backlash(backlash_case c, uint64_t seed)
         walk_next(&rng, &w, c.drive == GS_BASE_SPEED_DRIVEN ? 20.0 : 0.8,
                   c.rack ? 40.0 : 2.0, 80);
         in = walk_input(c.drive, &w);
-        gs_rig_step(&rig, &in, &out);
+        gs_rig_step(&rig.c, &rig.s, &in, &out);
         check_backlash_step(&out, e_prev, f_prev, dt, k, label);
-        e_prev = (double)out.contact_energy_J;
-        f_prev = (double)out.contact_force_N;
+        e_prev = (double)out.contact_energy;
+        f_prev = (double)out.contact_force;
         max_e = dmax(max_e, e_prev);
     }
     /* the scenario does load the contact spring */

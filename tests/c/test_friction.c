@@ -68,11 +68,11 @@ static void check_gear_point(const gs_simple_gear_params *gp, double wB, double 
     const double loss = e.mesh_power + muB * wB * wB + muF * wF * wF;
     const double tauB = muB * wB + e.TB;
     const double ptol = TOL_REL * (fabs(tauB * wB) + fabs(tauF * wF));
-    gs_simple_gear gear;
+    test_gear gear;
     gs_gear_ports_in in;
     gs_gear_ports_out out;
     gs_rig_params rp = gs_rig_params_default();
-    gs_rig rig;
+    test_rig rig;
     gs_rig_output ro;
     gs_rig_input ri;
     int k;
@@ -83,7 +83,7 @@ static void check_gear_point(const gs_simple_gear_params *gp, double wB, double 
     in.follower_torque_Nm = R(tauF);
     in.temperature_K = R(temp_K > 0.0 ? temp_K : 300.0);
     in.use_temperature_input = temp_K > 0.0;
-    gs_simple_gear_step(&gear, R(1e-3), &in, &out);
+    gs_simple_gear_step(&gear.c, &gear.s, R(1e-3), &in, &out);
     ASSERT_NEAR(out.follower_speed_rad_s, wF, TOL_REL, 0.0);
     ASSERT_NEAR(out.base_torque_Nm, tauB, TOL_REL, 0.0);
     ASSERT_NEAR(out.mesh_loss_power_W, e.mesh_power, TOL_REL, 1e-12);
@@ -96,18 +96,18 @@ static void check_gear_point(const gs_simple_gear_params *gp, double wB, double 
     INIT_GEAR_RIG(&rig, gp, &rp);
     ri = rig_speed_input(wB, tauF);
     if (temp_K > 0.0)
-        ri.measured_temperature_K = R(temp_K);
+        ri.measured_temperature = R(temp_K);
     for (k = 0; k < 5; ++k)
-        gs_rig_step(&rig, &ri, &ro);
+        gs_rig_step(&rig.c, &rig.s, &ri, &ro);
     ASSERT_NEAR(ro.follower_speed, wF, TOL_REL, 0.0);
     ASSERT_NEAR(ro.follower_port_torque, tauF, TOL_REL, 0.0);
-    ASSERT_NEAR(ro.base_port_torque_Nm, tauB, TOL_REL, 0.0);
-    ASSERT_NEAR(ro.base_torque_Nm, tauB, TOL_REL, 0.0);
-    ASSERT_NEAR(ro.mesh_loss_power_W, e.mesh_power, TOL_REL, 1e-12);
-    ASSERT_NEAR(ro.loss_power_W, loss, TOL_REL, 1e-12);
-    ASSERT_NEAR(ro.port_power_W, loss, 0.0, ptol + 1e-12);
+    ASSERT_NEAR(ro.base_port_torque, tauB, TOL_REL, 0.0);
+    ASSERT_NEAR(ro.base_torque, tauB, TOL_REL, 0.0);
+    ASSERT_NEAR(ro.mesh_loss_power, e.mesh_power, TOL_REL, 1e-12);
+    ASSERT_NEAR(ro.loss_power, loss, TOL_REL, 1e-12);
+    ASSERT_NEAR(ro.port_power, loss, 0.0, ptol + 1e-12);
     if (temp_K > 0.0)
-        ASSERT_NEAR(ro.temperature_K, temp_K, TOL_REL, 0.0);
+        ASSERT_NEAR(ro.temperature, temp_K, TOL_REL, 0.0);
 }
 
 /* Both output_shaft_rotates options, both speed signs, both power-flow
@@ -424,11 +424,11 @@ static void check_rack_point(const gs_rack_pinion_params *pp, double wP, double 
     const double mesh = fabs(Tn) * fabs(v) * (pinion_drives ? (1.0 / eta - 1.0) : (1.0 - eta));
     const double loss = mesh + muP * wP * wP + muR * v * v;
     const double tauP = muP * wP + TP;
-    gs_rack_pinion blk;
+    test_rack blk;
     gs_rack_ports_in in;
     gs_rack_ports_out out;
     gs_rig_params rp = gs_rig_params_default();
-    gs_rig rig;
+    test_rig rig;
     gs_rig_input ri;
     gs_rig_output ro;
     int k;
@@ -439,7 +439,7 @@ static void check_rack_point(const gs_rack_pinion_params *pp, double wP, double 
     in.rack_force_N = R(FR);
     in.temperature_K = R(temp_K > 0.0 ? temp_K : 300.0);
     in.use_temperature_input = temp_K > 0.0;
-    gs_rack_pinion_step(&blk, R(1e-3), &in, &out);
+    gs_rack_pinion_step(&blk.c, &blk.s, R(1e-3), &in, &out);
     ASSERT_NEAR(out.rack_velocity_m_s, v, TOL_REL, 0.0);
     ASSERT_NEAR(out.pinion_torque_Nm, tauP, TOL_REL, 0.0);
     ASSERT_NEAR(out.mesh_loss_power_W, mesh, TOL_REL, 1e-12);
@@ -452,15 +452,15 @@ static void check_rack_point(const gs_rack_pinion_params *pp, double wP, double 
     INIT_RACK_RIG(&rig, pp, &rp);
     ri = rig_speed_input(wP, FR);
     if (temp_K > 0.0)
-        ri.measured_temperature_K = R(temp_K);
+        ri.measured_temperature = R(temp_K);
     for (k = 0; k < 5; ++k)
-        gs_rig_step(&rig, &ri, &ro);
+        gs_rig_step(&rig.c, &rig.s, &ri, &ro);
     ASSERT_NEAR(ro.follower_speed, v, TOL_REL, 0.0);
     ASSERT_NEAR(ro.follower_port_torque, FR, TOL_REL, 0.0);
-    ASSERT_NEAR(ro.base_port_torque_Nm, tauP, TOL_REL, 0.0);
-    ASSERT_NEAR(ro.mesh_loss_power_W, mesh, TOL_REL, 1e-12);
-    ASSERT_NEAR(ro.loss_power_W, loss, TOL_REL, 1e-12);
-    ASSERT_NEAR(ro.port_power_W, loss, 0.0, TOL_REL * (fabs(tauP * wP) + fabs(FR * v)) + 1e-12);
+    ASSERT_NEAR(ro.base_port_torque, tauP, TOL_REL, 0.0);
+    ASSERT_NEAR(ro.mesh_loss_power, mesh, TOL_REL, 1e-12);
+    ASSERT_NEAR(ro.loss_power, loss, TOL_REL, 1e-12);
+    ASSERT_NEAR(ro.port_power, loss, 0.0, TOL_REL * (fabs(tauP * wP) + fabs(FR * v)) + 1e-12);
 }
 
 static void sweep_rack(gs_rack_pinion_params pp, double temp_K, double eta)

@@ -35,7 +35,7 @@ static void test_gear_rig_speed_driven_signs(void **state)
         for (iw = 0; iw < 2; ++iw) {
             gs_simple_gear_params gp = ideal_gear(g, rots[ir]);
             gs_rig_params rp = gs_rig_params_default();
-            gs_rig rig;
+            test_rig rig;
             gs_rig_output out, prev;
             const double s = gear_sign(rots[ir]);
             const double wB = speeds[iw];
@@ -46,28 +46,28 @@ static void test_gear_rig_speed_driven_signs(void **state)
             dt = (double)rp.dt_s;
             memset(&prev, 0, sizeof prev);
             for (k = 1; k <= 6; ++k) {
-                gs_rig_step(&rig, &in, &out);
-                ASSERT_NEAR(out.base_speed_rad_s, wB, TOL_REL, 0.0);
-                ASSERT_NEAR(out.follower_speed, s * (double)in.base_speed_rad_s / g, TOL_REL, 0.0);
+                gs_rig_step(&rig.c, &rig.s, &in, &out);
+                ASSERT_NEAR(out.base_speed, wB, TOL_REL, 0.0);
+                ASSERT_NEAR(out.follower_speed, s * (double)in.base_speed / g, TOL_REL, 0.0);
                 /* rigid mesh from a common zero: theta_F = s*theta_B/g */
-                ASSERT_NEAR(out.follower_position, s * (double)out.base_angle_rad / g, TOL_REL,
+                ASSERT_NEAR(out.follower_position, s * (double)out.base_angle / g, TOL_REL,
                             1e-12);
                 if (k >= 2) {
-                    ASSERT_NEAR((double)out.base_angle_rad - (double)prev.base_angle_rad, wB * dt,
+                    ASSERT_NEAR((double)out.base_angle - (double)prev.base_angle, wB * dt,
                                 TOL_ACC, 0.0);
                     ASSERT_NEAR(out.follower_acceleration, 0.0, 0.0, 1e-9);
                     ASSERT_NEAR(out.follower_port_torque, load, TOL_REL, 0.0);
-                    ASSERT_NEAR(out.base_port_torque_Nm, -s * load / g, TOL_REL, 0.0);
-                    ASSERT_NEAR(out.base_torque_Nm, -s * load / g, TOL_REL, 0.0);
+                    ASSERT_NEAR(out.base_port_torque, -s * load / g, TOL_REL, 0.0);
+                    ASSERT_NEAR(out.base_torque, -s * load / g, TOL_REL, 0.0);
                     /* ideal gear: no loss, port powers cancel */
-                    ASSERT_NEAR(out.mesh_loss_power_W, 0.0, 0.0, 1e-12);
-                    ASSERT_NEAR(out.loss_power_W, 0.0, 0.0, 1e-12);
-                    ASSERT_NEAR(out.port_power_W, 0.0, 0.0, TOL_REL * fabs(load * wB));
+                    ASSERT_NEAR(out.mesh_loss_power, 0.0, 0.0, 1e-12);
+                    ASSERT_NEAR(out.loss_power, 0.0, 0.0, 1e-12);
+                    ASSERT_NEAR(out.port_power, 0.0, 0.0, TOL_REL * fabs(load * wB));
                 }
                 prev = out;
             }
             /* the drive supplies power iff the load opposes the follower */
-            assert_true(((double)out.base_torque_Nm * wB > 0.0) ==
+            assert_true(((double)out.base_torque * wB > 0.0) ==
                         (load * (double)out.follower_speed < 0.0));
         }
     }
@@ -82,7 +82,7 @@ static void test_gear_block_signs(void **state)
     (void)state;
     for (ir = 0; ir < 2; ++ir) {
         gs_simple_gear_params gp = ideal_gear(g, rots[ir]);
-        gs_simple_gear gear;
+        test_gear gear;
         gs_gear_ports_in in;
         gs_gear_ports_out out;
         const double s = gear_sign(rots[ir]);
@@ -90,7 +90,7 @@ static void test_gear_block_signs(void **state)
         memset(&in, 0, sizeof in);
         in.base_speed_rad_s = R(-12.0);
         in.follower_torque_Nm = R(-4.5);
-        gs_simple_gear_step(&gear, R(1e-3), &in, &out);
+        gs_simple_gear_step(&gear.c, &gear.s, R(1e-3), &in, &out);
         ASSERT_NEAR(out.follower_speed_rad_s, s * -12.0 / g, TOL_REL, 0.0);
         ASSERT_NEAR(out.base_torque_Nm, -s * -4.5 / g, TOL_REL, 0.0);
         ASSERT_NEAR(out.follower_torque_Nm, -4.5, TOL_REL, 0.0);
@@ -112,9 +112,9 @@ static void test_rack_signs(void **state)
         for (iw = 0; iw < 2; ++iw) {
             gs_rack_pinion_params pp = gs_rack_pinion_params_default();
             gs_rig_params rp = gs_rig_params_default();
-            gs_rig rig;
+            test_rig rig;
             gs_rig_output out;
-            gs_rack_pinion blk;
+            test_rack blk;
             gs_rack_ports_in bin;
             gs_rack_ports_out bout;
             const double sR = rack_sign(dirs[id]);
@@ -127,19 +127,19 @@ static void test_rack_signs(void **state)
             rp.driven_inertia = R(3.0);
             INIT_RACK_RIG(&rig, &pp, &rp);
             for (k = 1; k <= 5; ++k)
-                gs_rig_step(&rig, &in, &out);
+                gs_rig_step(&rig.c, &rig.s, &in, &out);
             ASSERT_NEAR(out.follower_speed, sR * r * wP, TOL_REL, 0.0);
-            ASSERT_NEAR(out.follower_position, sR * r * (double)out.base_angle_rad, TOL_REL, 1e-12);
+            ASSERT_NEAR(out.follower_position, sR * r * (double)out.base_angle, TOL_REL, 1e-12);
             ASSERT_NEAR(out.follower_acceleration, 0.0, 0.0, 1e-9);
             ASSERT_NEAR(out.follower_port_torque, force, TOL_REL, 0.0);
-            ASSERT_NEAR(out.base_port_torque_Nm, -sR * r * force, TOL_REL, 0.0);
-            ASSERT_NEAR(out.port_power_W, 0.0, 0.0, TOL_REL * fabs(force * r * wP));
+            ASSERT_NEAR(out.base_port_torque, -sR * r * force, TOL_REL, 0.0);
+            ASSERT_NEAR(out.port_power, 0.0, 0.0, TOL_REL * fabs(force * r * wP));
 
             INIT_RACK(&blk, &pp);
             memset(&bin, 0, sizeof bin);
             bin.pinion_speed_rad_s = R(wP);
             bin.rack_force_N = R(-force);
-            gs_rack_pinion_step(&blk, R(1e-3), &bin, &bout);
+            gs_rack_pinion_step(&blk.c, &blk.s, R(1e-3), &bin, &bout);
             ASSERT_NEAR(bout.rack_velocity_m_s, sR * r * wP, TOL_REL, 0.0);
             ASSERT_NEAR(bout.pinion_torque_Nm, sR * r * force, TOL_REL, 0.0);
             ASSERT_NEAR(bout.rack_force_N, -force, TOL_REL, 0.0);
@@ -157,7 +157,7 @@ static void test_tooth_parameterization(void **state)
     for (i = 0; i < 3; ++i) {
         gs_rack_pinion_params pp = gs_rack_pinion_params_default();
         gs_rig_params rp = gs_rig_params_default();
-        gs_rig rig;
+        test_rig rig;
         gs_rig_output out;
         double r;
         const gs_rig_input in = rig_speed_input(6.0, -15.0);
@@ -170,9 +170,9 @@ static void test_tooth_parameterization(void **state)
         ASSERT_NEAR(gs_rack_pinion_radius(&pp), r, TOL_REL, 0.0);
         INIT_RACK_RIG(&rig, &pp, &rp);
         for (k = 1; k <= 4; ++k)
-            gs_rig_step(&rig, &in, &out);
+            gs_rig_step(&rig.c, &rig.s, &in, &out);
         ASSERT_NEAR(out.follower_speed, rack_sign(pp.rack_directionality) * r * 6.0, TOL_REL, 0.0);
-        ASSERT_NEAR(out.base_port_torque_Nm, -rack_sign(pp.rack_directionality) * r * -15.0,
+        ASSERT_NEAR(out.base_port_torque, -rack_sign(pp.rack_directionality) * r * -15.0,
                     TOL_REL, 0.0);
     }
     {
@@ -200,7 +200,7 @@ static void test_gear_rig_inertia_and_load_terms(void **state)
     for (ir = 0; ir < 2; ++ir) {
         gs_simple_gear_params gp = ideal_gear(g, rots[ir]);
         gs_rig_params rp = gs_rig_params_default();
-        gs_rig rig;
+        test_rig rig;
         gs_rig_output out;
         double s = gear_sign(rots[ir]), dt, prev_w = 0.0;
         rp.driven_inertia = R(JF);
@@ -214,8 +214,8 @@ static void test_gear_rig_inertia_and_load_terms(void **state)
         for (k = 0; k < 60; ++k) {
             /* slow start through zero speed so the Coulomb tanh is exercised */
             const gs_rig_input in = rig_speed_input(-0.2 + a * k * dt, load);
-            const double wB = (double)in.base_speed_rad_s;
-            gs_rig_step(&rig, &in, &out);
+            const double wB = (double)in.base_speed;
+            gs_rig_step(&rig.c, &rig.s, &in, &out);
             if (k >= 2) {
                 const double alphaB = (wB - prev_w) / dt;
                 const double wF = s * wB / g;
@@ -226,8 +226,8 @@ static void test_gear_rig_inertia_and_load_terms(void **state)
                 const double tauB = -s * tauF / g;
                 ASSERT_NEAR(out.follower_acceleration, alphaF, 1e-9, 8.0 * GS_EPS * 3.0 / dt);
                 ASSERT_NEAR(out.follower_port_torque, tauF, 1e-9, 8.0 * GS_EPS * 3.0 / dt);
-                ASSERT_NEAR(out.base_port_torque_Nm, tauB, 1e-9, 8.0 * GS_EPS * 3.0 / dt);
-                ASSERT_NEAR(out.base_torque_Nm, tauB + JB * alphaB, 1e-9, 8.0 * GS_EPS * 3.0 / dt);
+                ASSERT_NEAR(out.base_port_torque, tauB, 1e-9, 8.0 * GS_EPS * 3.0 / dt);
+                ASSERT_NEAR(out.base_torque, tauB + JB * alphaB, 1e-9, 8.0 * GS_EPS * 3.0 / dt);
             }
             prev_w = wB;
         }
@@ -241,7 +241,7 @@ static void test_accel_filter_time_constant(void **state)
 {
     gs_simple_gear_params gp = ideal_gear(2.0, GS_ROTATES_SAME);
     gs_rig_params rp = gs_rig_params_default();
-    gs_rig rig;
+    test_rig rig;
     gs_rig_output out;
     const double a = 50.0;
     double dt, tau, tol;
@@ -256,14 +256,14 @@ static void test_accel_filter_time_constant(void **state)
     tol = 1e-6 + 100.0 * GS_EPS * 20.0 / (a * dt);
     for (k = 0; k < 20; ++k) {
         const gs_rig_input in = rig_speed_input(0.0, 0.0);
-        gs_rig_step(&rig, &in, &out);
+        gs_rig_step(&rig.c, &rig.s, &in, &out);
         ASSERT_NEAR(out.follower_acceleration, 0.0, 0.0, 1e-12);
     }
     for (ramp = 1; ramp <= 400; ++ramp) {
         const gs_rig_input in = rig_speed_input(a * ramp * dt, 0.0);
         const double alphaF = a / 2.0; /* s = +1, g = 2 */
         double ratio;
-        gs_rig_step(&rig, &in, &out);
+        gs_rig_step(&rig.c, &rig.s, &in, &out);
         ratio = (double)out.follower_acceleration / alphaF;
         /* a low-pass never overshoots a step */
         assert_true(ratio > 0.0);
@@ -288,7 +288,7 @@ static void run_torque_driven(gs_output_rotation rot, gs_friction_model fm, doub
 {
     gs_simple_gear_params gp = ideal_gear(2.0, rot);
     gs_rig_params rp = gs_rig_params_default();
-    gs_rig rig;
+    test_rig rig;
     gs_rig_output out;
     const double JB = 0.01, JF = 0.05;
     double s = gear_sign(rot), dt, prev_w = w0;
@@ -306,15 +306,15 @@ static void run_torque_driven(gs_output_rotation rot, gs_friction_model fm, doub
     for (k = 1; k <= 30; ++k) {
         const gs_rig_input in = rig_torque_input(motor, 0.0);
         double wB, alpha;
-        gs_rig_step(&rig, &in, &out);
-        wB = (double)out.base_speed_rad_s;
+        gs_rig_step(&rig.c, &rig.s, &in, &out);
+        wB = (double)out.base_speed;
         alpha = (wB - prev_w) / dt;
         ASSERT_NEAR(out.follower_speed, s * wB / 2.0, TOL_REL, 1e-12);
-        ASSERT_NEAR(out.base_torque_Nm, motor, TOL_REL, 0.0);
+        ASSERT_NEAR(out.base_torque, motor, TOL_REL, 0.0);
         if (k >= 3) {
             ASSERT_NEAR(alpha, expected_alpha, 1e-7, 16.0 * GS_EPS * fabs(wB) / dt);
             /* Newton on the base shaft: J_B*alpha_B = T - tau_B */
-            ASSERT_NEAR(out.base_port_torque_Nm, motor - JB * alpha, 1e-7,
+            ASSERT_NEAR(out.base_port_torque, motor - JB * alpha, 1e-7,
                         16.0 * GS_EPS * fabs(wB) / dt * JB);
             ASSERT_NEAR(out.follower_acceleration, s * alpha / 2.0, 1e-7,
                         16.0 * GS_EPS * fabs(wB) / dt);

@@ -377,13 +377,13 @@ typedef struct {
     gs_rig_output last, earlier;
 } run_result;
 
-static void run_rig(gs_rig *rig, const gs_rig_input *in, int steps, run_result *res)
+static void run_rig(test_rig *rig, const gs_rig_input *in, int steps, run_result *res)
 {
     int k;
     gs_rig_output out;
     memset(res, 0, sizeof *res);
     for (k = 0; k < steps; ++k) {
-        gs_rig_step(rig, in, &out);
+        gs_rig_step(&rig->c, &rig->s, in, &out);
         if (k == steps - 201)
             res->earlier = out;
     }
@@ -403,16 +403,16 @@ static int compare_settled(const case_label *cl, const run_result *r, const sett
         print_error("    non-finite output\n");
         return 0;
     }
-    ok &= check_value(cl, &header, "base_port_torque", (double)r->last.base_port_torque_Nm,
-                      p->tau_B, DRIFT(base_port_torque_Nm), rtol, tq_scale);
-    ok &= check_value(cl, &header, "base_torque", (double)r->last.base_torque_Nm, p->tau_B,
-                      DRIFT(base_torque_Nm), rtol, tq_scale);
+    ok &= check_value(cl, &header, "base_port_torque", (double)r->last.base_port_torque,
+                      p->tau_B, DRIFT(base_port_torque), rtol, tq_scale);
+    ok &= check_value(cl, &header, "base_torque", (double)r->last.base_torque, p->tau_B,
+                      DRIFT(base_torque), rtol, tq_scale);
     ok &= check_value(cl, &header, "follower_port_torque", (double)r->last.follower_port_torque,
                       p->tau_F, DRIFT(follower_port_torque), rtol, tq_scale);
     ok &= check_value(cl, &header, "follower_speed", (double)r->last.follower_speed, p->omega_F,
                       DRIFT(follower_speed), rtol, w_scale);
-    ok &= check_value(cl, &header, "base_speed", (double)r->last.base_speed_rad_s, p->omega_B,
-                      DRIFT(base_speed_rad_s), rtol, w_scale);
+    ok &= check_value(cl, &header, "base_speed", (double)r->last.base_speed, p->omega_B,
+                      DRIFT(base_speed), rtol, w_scale);
 #undef DRIFT
     return ok;
 }
@@ -465,7 +465,7 @@ static void set_backlash(gs_backlash_params *bl, int on, int which)
  * holds that point. The expectations are then re-derived forward from the
  * inputs actually passed (rounded to gs_real). */
 static void run_case(matrix_stats *st, const case_label *cl, const hand_model *h0,
-                     gs_rig *rig, double w0, double t0, double p_th, double w_th, double w_coul,
+                     test_rig *rig, double w0, double t0, double p_th, double w_th, double w_coul,
                      double measured_T)
 {
     const double sigma = cl->sigma;
@@ -480,19 +480,19 @@ static void run_case(matrix_stats *st, const case_label *cl, const hand_model *h
     double rtol = cl->backlash ? SETTLED_TOL_BACKLASH : SETTLED_TOL_RIGID;
     int ok = 1;
 
-    in.measured_temperature_K = R(measured_T);
-    h.T = (double)in.measured_temperature_K;
+    in.measured_temperature = R(measured_T);
+    h.T = (double)in.measured_temperature;
     in.load = R(load_d);
     if (cl->drive == GS_BASE_SPEED_DRIVEN) {
-        in.base_speed_rad_s = R(h.rho * wF_star);
-        p = expect_speed_driven(&h, (double)in.base_speed_rad_s, (double)in.load, phi);
+        in.base_speed = R(h.rho * wF_star);
+        p = expect_speed_driven(&h, (double)in.base_speed, (double)in.load, phi);
         run_rig(rig, &in, N_STEPS_SPEED, &res);
     } else {
         double a, c;
         loss_ac(&h, TF_star, sigma, phi, &a, &c);
-        in.base_torque_Nm =
+        in.base_torque =
             R((c - a * TF_star) / h.rho + h.mu_B * h.rho * wF_star);
-        p = expect_torque_driven(&h, (double)in.base_torque_Nm, (double)in.load, sigma, phi,
+        p = expect_torque_driven(&h, (double)in.base_torque, (double)in.load, sigma, phi,
                                  &ok);
         /* the design point must come back (checks the algebra of both directions) */
         if (!near_enough(p.omega_F, wF_star, 1e-5, 0.0))
@@ -524,7 +524,7 @@ static void gear_cases(matrix_stats *st)
                         const gear_variant *v = &gear_variants[iv];
                         gs_simple_gear_params gp = gs_simple_gear_params_default();
                         gs_rig_params rp = gs_rig_params_default();
-                        gs_rig rig;
+                        test_rig rig;
                         hand_model h;
                         case_label cl;
                         double t0 = G_T0, measured_T = 300.0;
@@ -639,7 +639,7 @@ static void rack_cases(matrix_stats *st)
                         const rack_variant *v = &rack_variants[iv];
                         gs_rack_pinion_params pp = gs_rack_pinion_params_default();
                         gs_rig_params rp = gs_rig_params_default();
-                        gs_rig rig;
+                        test_rig rig;
                         hand_model h;
                         case_label cl;
                         const int tooth = (iv + ifl + id) & 1;
@@ -756,7 +756,7 @@ static const stick_config stick_configs[] = {
 #define N_STICK ((int)(sizeof stick_configs / sizeof stick_configs[0]))
 
 /* Initialises the stick rig; returns J_eff (driven-side referred) and rho. */
-static double stick_rig(gs_rig *rig, const stick_config *sc, gs_base_drive drive,
+static double stick_rig(test_rig *rig, const stick_config *sc, gs_base_drive drive,
                         double initial_base_speed, double *rho)
 {
     gs_rig_params rp = gs_rig_params_default();
@@ -800,7 +800,7 @@ static void test_stick_holds(void **state)
     for (ic = 0; ic < N_STICK; ++ic)
         for (il = 0; il < 2; ++il) {
             const double load = il ? -0.5 : 0.5;
-            gs_rig rig;
+            test_rig rig;
             gs_rig_output out;
             double rho;
             const gs_rig_input in = rig_torque_input(0.0, load);
@@ -808,12 +808,12 @@ static void test_stick_holds(void **state)
             double bad_w = 0.0, bad_wb = 0.0;
             (void)stick_rig(&rig, &stick_configs[ic], GS_BASE_TORQUE_DRIVEN, 0.0, &rho);
             for (k = 1; k <= 1000; ++k) {
-                gs_rig_step(&rig, &in, &out);
+                gs_rig_step(&rig.c, &rig.s, &in, &out);
                 if (k >= 2 && first_bad < 0 &&
-                    (!is_zero((double)out.follower_speed) || !is_zero((double)out.base_speed_rad_s))) {
+                    (!is_zero((double)out.follower_speed) || !is_zero((double)out.base_speed))) {
                     first_bad = k;
                     bad_w = (double)out.follower_speed;
-                    bad_wb = (double)out.base_speed_rad_s;
+                    bad_wb = (double)out.base_speed;
                 }
             }
             if (first_bad >= 0) {
@@ -821,7 +821,7 @@ static void test_stick_holds(void **state)
                             "(follower_speed %.6g, base_speed %.6g; after 1000 steps %.6g, %.6g), "
                             "expected exactly 0\n",
                             stick_configs[ic].name, load, S_COUL, first_bad, bad_w, bad_wb,
-                            (double)out.follower_speed, (double)out.base_speed_rad_s);
+                            (double)out.follower_speed, (double)out.base_speed);
                 ++bad;
             }
         }
@@ -842,7 +842,7 @@ static void test_breakaway(void **state)
         for (il = 0; il < 2; ++il) {
             const stick_config *sc = &stick_configs[ic];
             const double load = il ? -1.5 : 1.5;
-            gs_rig rig;
+            test_rig rig;
             gs_rig_output out;
             double rho, J, acc, w600 = 0.0, worst = 0.0, acc_meas;
             int worst_k = -1;
@@ -853,7 +853,7 @@ static void test_breakaway(void **state)
             J = stick_rig(&rig, sc, GS_BASE_TORQUE_DRIVEN, 0.0, &rho);
             acc = (load - S_COUL * sgn(load)) / J;
             for (k = 1; k <= 800; ++k) {
-                gs_rig_step(&rig, &in, &out);
+                gs_rig_step(&rig.c, &rig.s, &in, &out);
                 if (!sc->backlash) {
                     const double want = k * DT * acc;
                     const double err = fabs((double)out.follower_speed - want) / fabs(want);
@@ -868,7 +868,7 @@ static void test_breakaway(void **state)
             acc_meas = ((double)out.follower_speed - w600) / (200.0 * DT);
             if (!near_enough(acc_meas, acc, tol, 0.0) ||
                 !near_enough((double)out.follower_acceleration, acc, tol, 0.0) ||
-                !near_enough((double)out.base_speed_rad_s, rho * (double)out.follower_speed,
+                !near_enough((double)out.base_speed, rho * (double)out.follower_speed,
                              sc->backlash ? 1e-3 : TOL_REL, 0.0) ||
                 worst > tol) {
                 print_error("breakaway (b) %s, load %+.1f, Coulomb %.1f, J_eff %.4g: acceleration "
@@ -877,7 +877,7 @@ static void test_breakaway(void **state)
                             "error %.3g at step %d\n",
                             sc->name, load, S_COUL, J, acc_meas, (double)out.follower_acceleration,
                             acc, (double)out.follower_speed, 800 * DT * acc,
-                            (double)out.base_speed_rad_s / (double)out.follower_speed, rho, worst,
+                            (double)out.base_speed / (double)out.follower_speed, rho, worst,
                             worst_k);
                 ++bad;
             }
@@ -894,7 +894,7 @@ typedef struct {
     double w_end, wb_end;
 } rest_result;
 
-static rest_result run_to_rest(gs_rig *rig, int n, const gs_rig_input *in)
+static rest_result run_to_rest(test_rig *rig, int n, const gs_rig_input *in)
 {
     rest_result r;
     gs_rig_output out;
@@ -903,7 +903,7 @@ static rest_result run_to_rest(gs_rig *rig, int n, const gs_rig_input *in)
     r.k_rest = -1;
     r.k_first_zero = -1;
     for (k = 1; k <= n; ++k) {
-        gs_rig_step(rig, in, &out);
+        gs_rig_step(&rig->c, &rig->s, in, &out);
         if (is_zero((double)out.follower_speed)) {
             if (r.k_rest < 0)
                 r.k_rest = k;
@@ -914,7 +914,7 @@ static rest_result run_to_rest(gs_rig *rig, int n, const gs_rig_input *in)
         }
     }
     r.w_end = (double)out.follower_speed;
-    r.wb_end = (double)out.base_speed_rad_s;
+    r.wb_end = (double)out.base_speed;
     return r;
 }
 
@@ -940,7 +940,7 @@ static void test_coast_to_rest(void **state)
     (void)state;
     for (ic = 0; ic < N_STICK; ++ic) {
         const stick_config *sc = &stick_configs[ic];
-        gs_rig rig;
+        test_rig rig;
         double rho, J, wF0, t_hand, t_rest, tol;
         const gs_rig_input in = rig_torque_input(0.0, 0.0);
         rest_result r;
@@ -982,7 +982,7 @@ static void test_speed_driven_stop(void **state)
     char lines[2][160];
     (void)state;
     for (ic = 0; ic < 2; ++ic) {
-        gs_rig rig;
+        test_rig rig;
         gs_rig_output out;
         double rho, J, wF0, t_hand, tol, w_carried;
         const gs_rig_input run = rig_speed_input(wB, 0.0);
@@ -994,7 +994,7 @@ static void test_speed_driven_stop(void **state)
         wF0 = wB / rho;
         t_hand = J * fabs(wF0) / S_COUL;
         for (k = 1; k <= 500; ++k)
-            gs_rig_step(&rig, &run, &out);
+            gs_rig_step(&rig.c, &rig.s, &run, &out);
         w_carried = (double)out.follower_speed;
         r = run_to_rest(&rig, 500, &stop);
         report_rest(lines[ic], sizeof lines[ic], cfg[ic].name, &r, t_hand);

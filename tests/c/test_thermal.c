@@ -18,7 +18,7 @@
 static double rig_base_torque_at(const gs_simple_gear_params *gp, double temp_K, double TF)
 {
     gs_rig_params rp = gs_rig_params_default();
-    gs_rig rig;
+    test_rig rig;
     gs_rig_output out;
     gs_rig_input in;
     const double g = (double)gp->teeth_ratio, s = gear_sign(gp->output_shaft_rotates);
@@ -26,11 +26,11 @@ static double rig_base_torque_at(const gs_simple_gear_params *gp, double temp_K,
     rp.temperature_source = GS_TEMPERATURE_FROM_INPUT;
     INIT_GEAR_RIG(&rig, gp, &rp);
     in = rig_speed_input(s * g * 4.0, TF);
-    in.measured_temperature_K = R(temp_K);
+    in.measured_temperature = R(temp_K);
     for (k = 0; k < 4; ++k)
-        gs_rig_step(&rig, &in, &out);
-    ASSERT_NEAR(out.temperature_K, temp_K, TOL_REL, 0.0);
-    return (double)out.base_port_torque_Nm;
+        gs_rig_step(&rig.c, &rig.s, &in, &out);
+    ASSERT_NEAR(out.temperature, temp_K, TOL_REL, 0.0);
+    return (double)out.base_port_torque;
 }
 
 static gs_simple_gear_params table_gear(void)
@@ -99,7 +99,7 @@ static void test_rack_temperature_table(void **state)
     pp.friction_model = GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY;
     for (i = 0; i < 5; ++i) {
         gs_rig_params rp = gs_rig_params_default();
-        gs_rig rig;
+        test_rig rig;
         gs_rig_output out;
         gs_rig_input in = rig_speed_input(w, -F); /* pinion drives */
         double eta = etas[i], r = (double)pp.pinion_radius_m;
@@ -108,11 +108,11 @@ static void test_rack_temperature_table(void **state)
             if (fabs(etas[i] - (double)pp.efficiency_vector[j]) < 1e-6)
                 eta = (double)pp.efficiency_vector[j];
         rp.temperature_source = GS_TEMPERATURE_FROM_INPUT;
-        in.measured_temperature_K = R(temps[i]);
+        in.measured_temperature = R(temps[i]);
         INIT_RACK_RIG(&rig, &pp, &rp);
         for (k = 0; k < 4; ++k)
-            gs_rig_step(&rig, &in, &out);
-        ASSERT_NEAR(out.base_port_torque_Nm, r * F / eta, TOL_REL, 0.0);
+            gs_rig_step(&rig.c, &rig.s, &in, &out);
+        ASSERT_NEAR(out.base_port_torque, r * F / eta, TOL_REL, 0.0);
     }
 }
 
@@ -194,7 +194,7 @@ static void test_adiabatic_temperature_rise(void **state)
 {
     gs_simple_gear_params gp = table_gear();
     gs_rig_params rp = gs_rig_params_default();
-    gs_rig rig;
+    test_rig rig;
     gs_rig_output out;
     const double g = 2.5, wF = 8.0, TF = 5.0;
     double C, T0, dt, energy = 0.0, prevT;
@@ -214,16 +214,16 @@ static void test_adiabatic_temperature_rise(void **state)
         /* eta at the state the step starts from, default table 300..320 K */
         const double eta = 0.90 + (0.85 - 0.90) * (prevT - 300.0) / 20.0;
         const double P = TF * wF * (1.0 / eta - 1.0);
-        gs_rig_step(&rig, &in, &out);
-        ASSERT_NEAR(out.loss_power_W, P, 10.0 * TOL_REL, 0.0);
+        gs_rig_step(&rig.c, &rig.s, &in, &out);
+        ASSERT_NEAR(out.loss_power, P, 10.0 * TOL_REL, 0.0);
         /* explicit Euler of C*dT/dt = P_loss */
-        ASSERT_NEAR(out.temperature_K, prevT + (double)out.loss_power_W * dt / C, 0.0,
+        ASSERT_NEAR(out.temperature, prevT + (double)out.loss_power * dt / C, 0.0,
                     TOL_REL * 10.0 + 0.5 * GS_EPS * 512.0);
-        prevT = (double)out.temperature_K;
-        energy += (double)out.loss_power_W * dt;
+        prevT = (double)out.temperature;
+        energy += (double)out.loss_power * dt;
     }
     /* the whole rise: integral of P_loss*dt over C */
-    ASSERT_NEAR(out.temperature_K, T0 + energy / C, 0.0, TOL_ACC + 200 * 0.5 * GS_EPS * 512.0);
+    ASSERT_NEAR(out.temperature, T0 + energy / C, 0.0, TOL_ACC + 200 * 0.5 * GS_EPS * 512.0);
     assert_true(energy / C > 3.0); /* the scenario heats noticeably */
 }
 
@@ -233,7 +233,7 @@ static void test_heat_path_steady_state(void **state)
 {
     gs_simple_gear_params gp = table_gear();
     gs_rig_params rp = gs_rig_params_default();
-    gs_rig rig;
+    test_rig rig;
     gs_rig_output out;
     const double g = 2.5, wF = 8.0, TF = 5.0, Tamb = 293.0;
     double eta, P, Rth;
@@ -255,13 +255,13 @@ static void test_heat_path_steady_state(void **state)
     P = TF * wF * (1.0 / eta - 1.0);
     for (k = 0; k < 3000; ++k) { /* 30 s = 60 time constants */
         gs_rig_input in = rig_speed_input(-g * wF, TF);
-        in.ambient_temperature_K = R(Tamb);
-        gs_rig_step(&rig, &in, &out);
+        in.ambient_temperature = R(Tamb);
+        gs_rig_step(&rig.c, &rig.s, &in, &out);
     }
-    ASSERT_NEAR(out.loss_power_W, P, TOL_REL, 0.0);
+    ASSERT_NEAR(out.loss_power, P, TOL_REL, 0.0);
     /* slack: the Euler update stalls once |dT| < ulp(T)/2, i.e. within
      * R*C*ulp/dt of the fixed point (negligible in double) */
-    ASSERT_NEAR(out.temperature_K, Tamb + P * Rth, 0.0,
+    ASSERT_NEAR(out.temperature, Tamb + P * Rth, 0.0,
                 TOL_ACC + 2.0 * Rth * (double)gp.thermal_mass_J_K * GS_EPS * 512.0 / (double)rp.dt_s);
 }
 
@@ -271,7 +271,7 @@ static void test_heat_path_steady_state_temperature_feedback(void **state)
 {
     gs_simple_gear_params gp = table_gear();
     gs_rig_params rp = gs_rig_params_default();
-    gs_rig rig;
+    test_rig rig;
     gs_rig_output out;
     const double g = 2.5, wF = 8.0, TF = 5.0, Tamb = 300.0;
     double Rth, T = Tamb;
@@ -291,16 +291,16 @@ static void test_heat_path_steady_state_temperature_feedback(void **state)
     assert_true(T > 300.0 && T < 320.0); /* inside the table's second segment */
     for (k = 0; k < 8000; ++k) {
         gs_rig_input in = rig_speed_input(g * wF, -TF);
-        in.ambient_temperature_K = R(Tamb);
-        gs_rig_step(&rig, &in, &out);
+        in.ambient_temperature = R(Tamb);
+        gs_rig_step(&rig.c, &rig.s, &in, &out);
     }
     {
         /* slack: Euler stall band R*C*ulp/dt (negligible in double) */
         const double tol = TOL_ACC + 4.0 * Rth * (double)gp.thermal_mass_J_K * GS_EPS * 512.0 /
                                          (double)rp.dt_s;
-        ASSERT_NEAR(out.temperature_K, T, 0.0, tol);
+        ASSERT_NEAR(out.temperature, T, 0.0, tol);
         /* self-consistency of the balance at the end: T = T_amb + P*R_th */
-        ASSERT_NEAR(out.temperature_K, Tamb + (double)out.loss_power_W * Rth, 0.0, tol);
+        ASSERT_NEAR(out.temperature, Tamb + (double)out.loss_power * Rth, 0.0, tol);
     }
 }
 
@@ -309,7 +309,7 @@ static void test_heat_path_steady_state_temperature_feedback(void **state)
 static void test_block_heat_flow(void **state)
 {
     gs_simple_gear_params gp = table_gear();
-    gs_simple_gear gear;
+    test_gear gear;
     gs_gear_ports_in in;
     gs_gear_ports_out out;
     int k;
@@ -320,14 +320,14 @@ static void test_block_heat_flow(void **state)
     memset(&in, 0, sizeof in);
     in.heat_flow_W = R(10.0);
     for (k = 1; k <= 10; ++k) {
-        gs_simple_gear_step(&gear, R(0.1), &in, &out);
+        gs_simple_gear_step(&gear.c, &gear.s, R(0.1), &in, &out);
         ASSERT_NEAR(out.loss_power_W, 0.0, 0.0, 1e-12);
         ASSERT_NEAR(out.temperature_K, 300.0 + 10.0 * 0.1 * k / 5.0, TOL_REL, 0.0);
     }
     /* reset returns to the initial temperature */
-    gs_simple_gear_reset(&gear);
+    gs_simple_gear_reset(&gear.c, &gear.s);
     in.heat_flow_W = R(0.0);
-    gs_simple_gear_step(&gear, R(0.1), &in, &out);
+    gs_simple_gear_step(&gear.c, &gear.s, R(0.1), &in, &out);
     ASSERT_NEAR(out.temperature_K, 300.0, TOL_REL, 0.0);
 
     /* initial temperature 320 K -> eta = 0.85 on the first step; the step's
@@ -336,7 +336,7 @@ static void test_block_heat_flow(void **state)
     INIT_GEAR(&gear, &gp);
     in.base_speed_rad_s = R(2.5 * 4.0);
     in.follower_torque_Nm = R(-6.0);
-    gs_simple_gear_step(&gear, R(0.1), &in, &out);
+    gs_simple_gear_step(&gear.c, &gear.s, R(0.1), &in, &out);
     {
         const double eta = (double)gp.efficiency_vector[2];
         const double P = 6.0 * 4.0 * (1.0 / eta - 1.0);
@@ -350,11 +350,11 @@ static void test_block_heat_flow(void **state)
 static void test_rack_thermal(void **state)
 {
     gs_rack_pinion_params pp = gs_rack_pinion_params_default();
-    gs_rack_pinion blk;
+    test_rack blk;
     gs_rack_ports_in in;
     gs_rack_ports_out out;
     gs_rig_params rp = gs_rig_params_default();
-    gs_rig rig;
+    test_rig rig;
     gs_rig_output ro;
     double energy = 0.0;
     int k;
@@ -365,7 +365,7 @@ static void test_rack_thermal(void **state)
     memset(&in, 0, sizeof in);
     in.heat_flow_W = R(-8.0);
     for (k = 1; k <= 5; ++k) {
-        gs_rack_pinion_step(&blk, R(0.05), &in, &out);
+        gs_rack_pinion_step(&blk.c, &blk.s, R(0.05), &in, &out);
         ASSERT_NEAR(out.temperature_K, 300.0 - 8.0 * 0.05 * k / 4.0, TOL_REL, 0.0);
     }
 
@@ -373,13 +373,13 @@ static void test_rack_thermal(void **state)
     INIT_RACK_RIG(&rig, &pp, &rp);
     for (k = 0; k < 300; ++k) {
         const gs_rig_input ri = rig_speed_input(20.0, -30.0);
-        gs_rig_step(&rig, &ri, &ro);
-        energy += (double)ro.loss_power_W * (double)rp.dt_s;
+        gs_rig_step(&rig.c, &rig.s, &ri, &ro);
+        energy += (double)ro.loss_power * (double)rp.dt_s;
     }
     {
         const gs_rig_input ri = rig_speed_input(0.0, 0.0);
-        gs_rig_step(&rig, &ri, &ro);
-        ASSERT_NEAR(ro.temperature_K, 300.0 + energy / 4.0, 0.0, TOL_ACC + 301 * 0.5 * GS_EPS * 512.0);
+        gs_rig_step(&rig.c, &rig.s, &ri, &ro);
+        ASSERT_NEAR(ro.temperature, 300.0 + energy / 4.0, 0.0, TOL_ACC + 301 * 0.5 * GS_EPS * 512.0);
         assert_true(energy / 4.0 > 1.0);
     }
 }

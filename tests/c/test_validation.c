@@ -306,7 +306,7 @@ static void test_gear_rules(void **state)
     for (i = 0; i < sizeof gear_cases / sizeof gear_cases[0]; ++i) {
         const gear_case *c = &gear_cases[i];
         gs_simple_gear_params p = gs_simple_gear_params_default();
-        gs_simple_gear gear, before;
+        test_gear gear, before;
         gs_error err;
         gs_status st;
         c->mut(&p);
@@ -315,19 +315,19 @@ static void test_gear_rules(void **state)
         err.status = GS_E_NULL;
         err.parameter = "garbage";
         err.message = NULL;
-        st = gs_simple_gear_init(&gear, &p, &err);
+        st = gs_simple_gear_init(&gear.c, &gear.s, &p, &err);
         check_result("gs_simple_gear_init", c->label, st, &err, c->status, c->alt_status, c->param,
                      c->alt_param);
         if (st != GS_OK)
             assert_memory_equal(&gear, &before, sizeof gear); /* left unchanged */
         /* err may be NULL */
-        assert_int_equal(gs_simple_gear_init(&gear, &p, NULL), st);
+        assert_int_equal(gs_simple_gear_init(&gear.c, &gear.s, &p, NULL), st);
         /* the gear rig validates the block the same way */
         {
             gs_rig_params rp = gs_rig_params_default();
-            gs_rig rig;
+            test_rig rig;
             err.parameter = "garbage";
-            st = gs_rig_init_gear(&rig, &p, &rp, &err);
+            st = gs_rig_init_gear(&rig.c, &rig.s, &p, &rp, &err);
             check_result("gs_rig_init_gear", c->label, st, &err, c->status, c->alt_status,
                          c->param, c->alt_param);
         }
@@ -439,22 +439,22 @@ static void test_rack_rules(void **state)
     for (i = 0; i < sizeof rack_cases / sizeof rack_cases[0]; ++i) {
         const rack_case *c = &rack_cases[i];
         gs_rack_pinion_params p = gs_rack_pinion_params_default();
-        gs_rack_pinion rp, before;
+        test_rack rp, before;
         gs_rig_params rigp = gs_rig_params_default();
-        gs_rig rig;
+        test_rig rig;
         gs_error err;
         gs_status st;
         c->mut(&p);
         memset(&rp, 0x5A, sizeof rp);
         before = rp;
         err.parameter = "garbage";
-        st = gs_rack_pinion_init(&rp, &p, &err);
+        st = gs_rack_pinion_init(&rp.c, &rp.s, &p, &err);
         check_result("gs_rack_pinion_init", c->label, st, &err, c->status, GS_OK, c->param, NULL);
         if (st != GS_OK)
             assert_memory_equal(&rp, &before, sizeof rp);
-        assert_int_equal(gs_rack_pinion_init(&rp, &p, NULL), st);
+        assert_int_equal(gs_rack_pinion_init(&rp.c, &rp.s, &p, NULL), st);
         err.parameter = "garbage";
-        st = gs_rig_init_rack(&rig, &p, &rigp, &err);
+        st = gs_rig_init_rack(&rig.c, &rig.s, &p, &rigp, &err);
         check_result("gs_rig_init_rack", c->label, st, &err, c->status, GS_OK, c->param, NULL);
     }
 }
@@ -554,7 +554,7 @@ static void test_rig_rules(void **state)
         gs_simple_gear_params gp = gs_simple_gear_params_default();
         gs_rack_pinion_params pp = gs_rack_pinion_params_default();
         gs_rig_params rp = gs_rig_params_default();
-        gs_rig rig, before;
+        test_rig rig, before;
         gs_error err;
         gs_status st;
         use_backlash(&gp); /* contact sub-steps are active */
@@ -563,14 +563,14 @@ static void test_rig_rules(void **state)
         memset(&rig, 0x3C, sizeof rig);
         before = rig;
         err.parameter = "garbage";
-        st = gs_rig_init_gear(&rig, &gp, &rp, &err);
+        st = gs_rig_init_gear(&rig.c, &rig.s, &gp, &rp, &err);
         check_result("gs_rig_init_gear", c->label, st, &err, c->status, c->alt_status,
                      c->gear_param, NULL);
         if (st != GS_OK)
             assert_memory_equal(&rig, &before, sizeof rig);
-        assert_int_equal(gs_rig_init_gear(&rig, &gp, &rp, NULL), st);
+        assert_int_equal(gs_rig_init_gear(&rig.c, &rig.s, &gp, &rp, NULL), st);
         err.parameter = "garbage";
-        st = gs_rig_init_rack(&rig, &pp, &rp, &err);
+        st = gs_rig_init_rack(&rig.c, &rig.s, &pp, &rp, &err);
         check_result("gs_rig_init_rack", c->label, st, &err, c->status, c->alt_status,
                      c->rack_param, NULL);
     }
@@ -582,23 +582,28 @@ static void test_null_pointers(void **state)
     gs_simple_gear_params gp = gs_simple_gear_params_default();
     gs_rack_pinion_params pp = gs_rack_pinion_params_default();
     gs_rig_params rp = gs_rig_params_default();
-    gs_simple_gear gear;
-    gs_rack_pinion rack;
-    gs_rig rig;
+    test_gear gear;
+    test_rack rack;
+    test_rig rig;
     gs_error err;
     (void)state;
-    assert_int_equal(gs_simple_gear_init(NULL, &gp, &err), GS_E_NULL);
+    /* the object is now consts + state: either one NULL is GS_E_NULL */
+    assert_int_equal(gs_simple_gear_init(NULL, &gear.s, &gp, &err), GS_E_NULL);
     assert_int_equal(err.status, GS_E_NULL);
-    assert_int_equal(gs_simple_gear_init(&gear, NULL, &err), GS_E_NULL);
-    assert_int_equal(gs_rack_pinion_init(NULL, &pp, &err), GS_E_NULL);
-    assert_int_equal(gs_rack_pinion_init(&rack, NULL, &err), GS_E_NULL);
-    assert_int_equal(gs_rig_init_gear(NULL, &gp, &rp, &err), GS_E_NULL);
-    assert_int_equal(gs_rig_init_gear(&rig, NULL, &rp, &err), GS_E_NULL);
-    assert_int_equal(gs_rig_init_gear(&rig, &gp, NULL, &err), GS_E_NULL);
-    assert_int_equal(gs_rig_init_rack(NULL, &pp, &rp, &err), GS_E_NULL);
-    assert_int_equal(gs_rig_init_rack(&rig, NULL, &rp, &err), GS_E_NULL);
-    assert_int_equal(gs_rig_init_rack(&rig, &pp, NULL, &err), GS_E_NULL);
-    assert_int_equal(gs_rig_init_rack(&rig, &pp, &rp, NULL), GS_OK);
+    assert_int_equal(gs_simple_gear_init(&gear.c, NULL, &gp, &err), GS_E_NULL);
+    assert_int_equal(gs_simple_gear_init(&gear.c, &gear.s, NULL, &err), GS_E_NULL);
+    assert_int_equal(gs_rack_pinion_init(NULL, &rack.s, &pp, &err), GS_E_NULL);
+    assert_int_equal(gs_rack_pinion_init(&rack.c, NULL, &pp, &err), GS_E_NULL);
+    assert_int_equal(gs_rack_pinion_init(&rack.c, &rack.s, NULL, &err), GS_E_NULL);
+    assert_int_equal(gs_rig_init_gear(NULL, &rig.s, &gp, &rp, &err), GS_E_NULL);
+    assert_int_equal(gs_rig_init_gear(&rig.c, NULL, &gp, &rp, &err), GS_E_NULL);
+    assert_int_equal(gs_rig_init_gear(&rig.c, &rig.s, NULL, &rp, &err), GS_E_NULL);
+    assert_int_equal(gs_rig_init_gear(&rig.c, &rig.s, &gp, NULL, &err), GS_E_NULL);
+    assert_int_equal(gs_rig_init_rack(NULL, &rig.s, &pp, &rp, &err), GS_E_NULL);
+    assert_int_equal(gs_rig_init_rack(&rig.c, NULL, &pp, &rp, &err), GS_E_NULL);
+    assert_int_equal(gs_rig_init_rack(&rig.c, &rig.s, NULL, &rp, &err), GS_E_NULL);
+    assert_int_equal(gs_rig_init_rack(&rig.c, &rig.s, &pp, NULL, &err), GS_E_NULL);
+    assert_int_equal(gs_rig_init_rack(&rig.c, &rig.s, &pp, &rp, NULL), GS_OK);
 }
 
 /* gs_status_str: never NULL, never empty, one message per defined status. */
