@@ -68,8 +68,13 @@ python3 bench/m4_bench.py --json "$out/m4.json"
 echo "== Python ($py)" >&2
 if "$py" -c "import gearsim; gearsim.Model" >/dev/null 2>&1; then
   if ! "$py" -c "import scipy" >/dev/null 2>&1; then
-    echo "bench.sh: installing scipy into $py's environment for the solve_ivp comparison" >&2
-    "$py" -m pip install -q scipy >/dev/null 2>&1 || echo "bench.sh: could not install scipy; solve_ivp skipped" >&2
+    # the bench extra's pins from pyproject.toml, without `pip install .[bench]`:
+    # that would rebuild and replace the gearsim installed in that environment
+    echo "bench.sh: installing the bench extra (scipy) into $py's environment for the solve_ivp comparison" >&2
+    mapfile -t bench_reqs < <("$py" -c 'import tomllib
+with open("pyproject.toml", "rb") as f:
+    print("\n".join(tomllib.load(f)["project"]["optional-dependencies"]["bench"]))')
+    "$py" -m pip install -q "${bench_reqs[@]}" >/dev/null 2>&1 || echo "bench.sh: could not install scipy; solve_ivp skipped" >&2
   fi
   "$py" bench/python_bench.py "${pyflags[@]}" --json "$out/python.json"
 else

@@ -3,8 +3,9 @@
 #   build/fmu/gearsim_gear_rig.fmu and build/fmu/gearsim_rack_rig.fmu
 # plus build/fmu/reference/libgearsim.so (the same C core, for tests/fmu).
 #
-# The FMI 2.0 headers come from the FMPy wheel: fmpy is installed into the
-# project venv (.venv, or $GEARSIM_VENV) when missing.
+# The FMI 2.0 headers come from the FMPy wheel: the fmu extra's requirements
+# (fmpy, as pyproject.toml pins it) are installed into the project venv (.venv,
+# or $GEARSIM_VENV) when missing.
 #
 # Usage: scripts/build_fmu.sh [--test]     (--test also runs pytest tests/fmu)
 # Environment: GEARSIM_VENV (default .venv), GEARSIM_FMU_BUILD_DIR (default build/fmu)
@@ -30,7 +31,14 @@ fi
 py="$venv/bin/python"
 
 need=()
-"$py" -c "import fmpy" 2>/dev/null || need+=(fmpy)
+if ! "$py" -c "import fmpy" 2>/dev/null; then
+  # the fmu extra's pins, without `pip install .[fmu]`: that would rebuild the
+  # C extension and replace the venv's (editable) gearsim for nothing
+  mapfile -t fmu_reqs < <("$py" -c 'import tomllib
+with open("pyproject.toml", "rb") as f:
+    print("\n".join(tomllib.load(f)["project"]["optional-dependencies"]["fmu"]))')
+  need+=("${fmu_reqs[@]}")
+fi
 if ((run_tests)); then
   for mod in pytest numpy cffi; do
     "$py" -c "import $mod" 2>/dev/null || need+=("$mod")

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Installs what gearsim needs on a fresh Debian machine: the C toolchain and
 # cmocka from apt (when missing), and a Python virtual environment in .venv
-# with the package installed in editable mode. Safe to run again.
+# with the package installed in editable mode, with every extra the scripts
+# and tests use (all: analysis, hil, fmu, bench) and the test tools. Safe to
+# run again.
 # Usage: scripts/setup.sh [apt-package ...]   (extra Debian packages to ensure)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -26,6 +28,6 @@ stamp=.venv/.gearsim-installed
 if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ] || [ -n "$(find src include bindings -newer "$stamp" -print -quit 2>/dev/null)" ]; then
   echo "setup: installing the gearsim Python package into .venv (compiles the C core)" >&2
   .venv/bin/python -m pip install -q --upgrade pip >/dev/null
-  .venv/bin/python -m pip install -q -e ".[test]"
+  .venv/bin/python -m pip install -q -e ".[all,test]"
   touch "$stamp"
 fi

@@ -14,6 +14,13 @@ standard error naming the file, line, column, key or option; 1 on an internal
 failure, also one line (set GEARSIM_DEBUG=1 for the traceback); 130 on
 Ctrl-C. No command prints a traceback unless GEARSIM_DEBUG is set.
 
+A command that needs an extra which is not installed (docs/python.md,
+"Installing") exits with status 2 and one line naming it, e.g.
+``gearsim: 'gearsim fit' needs the analysis extra: pip install
+'gearsim[analysis]' (missing module: scipy)``: checked before the command
+starts for the modules it declares (``add_command(..., requires=...)``), and
+for any other module of an extra whose import fails while it runs.
+
 Standard output closed early (``gearsim compare ... --json | head -c 1``):
 the command stops quietly, prints nothing on standard error and exits with
 status 141 (128 + SIGPIPE, what a shell reports for a program killed by
@@ -28,10 +35,11 @@ Other layers add subcommands without editing this file: a module listed in
 ``PLUGIN_MODULES`` (``gearsim.hil.cli`` is one: ``gearsim hil ...``), or an
 entry point in the ``gearsim.commands`` group, defines either
 ``register(subparsers)``, which calls ``add_command(subparsers, name, help,
-configure, handler)`` (handler(args) returns the exit status and may raise the
-errors above), or ``add_subparsers(subparsers)``, which adds its own parser and
-sets ``func`` (func(args) returns the exit status). A plugin whose package is
-not installed is skipped.
+configure, handler, requires=...)`` (handler(args) returns the exit status and
+may raise the errors above; requires names the modules of extras it needs), or
+``add_subparsers(subparsers)``, which adds its own parser and sets ``func``
+(func(args) returns the exit status). A plugin whose package is not installed
+is skipped.
 """
 
 from __future__ import annotations
@@ -42,6 +50,7 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 
+from ._extras import missing_extra, require
 from ._outputs import say, stdout_to_devnull
 
 __all__ = [
@@ -114,9 +123,12 @@ def add_command(
     configure: Callable[[argparse.ArgumentParser], None],
     handler: Callable[[argparse.Namespace], int],
     description: str | None = None,
+    requires: Sequence[str] = (),
 ) -> argparse.ArgumentParser:
     """Register subcommand `name`: configure(parser) adds its arguments,
-    handler(args) runs it and returns the exit status."""
+    handler(args) runs it and returns the exit status. requires: the modules
+    (top-level names of gearsim._extras.EXTRAS) without which the command
+    cannot run; a missing one is reported before the handler starts."""
     p = subparsers.add_parser(
         name,
         help=help,
@@ -124,7 +136,7 @@ def add_command(
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     configure(p)
-    p.set_defaults(_handler=handler, _command=name)
+    p.set_defaults(_handler=handler, _command=name, _requires=tuple(requires))
     return p
 
 
@@ -205,6 +217,7 @@ def _run(argv: Sequence[str] | None) -> int:
             return EXIT_BAD_INPUT
         words = list(sys.argv[1:] if argv is None else argv) or [""]
         prog = f"gearsim {getattr(args, '_command', '') or words[0]}"
+        require(f"'{prog}'", getattr(args, "_requires", ()))
         return int(handler(args) or 0)
     except BrokenPipeError:
         raise  # main() ends quietly
@@ -217,6 +230,10 @@ def _run(argv: Sequence[str] | None) -> int:
         say(f"{_one_line(prog)}: interrupted")
         return EXIT_INTERRUPTED
     except Exception as exc:  # internal failure: one line, traceback only on request
+        missing = missing_extra(exc, f"'{_one_line(prog)}'")
+        if missing is not None:  # not a failure of gearsim: the user can fix it
+            say(f"gearsim: {missing}")
+            return EXIT_BAD_INPUT
         if os.environ.get("GEARSIM_DEBUG"):
             raise
         say(

@@ -515,6 +515,18 @@ def _report(args: argparse.Namespace) -> int:
     return 0
 
 
+#: Modules (of the analysis extra) each command cannot run without, checked
+#: before it starts. compare needs none: without pandas it reads CSV with the
+#: csv module, and zstandard is asked for only by a .zst file (one line naming
+#: the extra). The fits use scipy.optimize; report draws with matplotlib.
+REQUIRES: dict[str, tuple[str, ...]] = {
+    "compare": (),
+    "diagnose": ("scipy",),
+    "fit": ("scipy",),
+    "report": ("scipy", "matplotlib"),
+}
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     from ..cli import add_command
 
@@ -524,6 +536,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "simulate a model on a measurement and report its error",
         _compare_args,
         _compare,
+        requires=REQUIRES["compare"],
     )
     add_command(
         subparsers,
@@ -531,12 +544,21 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "rank the physical effects the model lacks, with evidence",
         _diagnose_args,
         _diagnose,
+        requires=REQUIRES["diagnose"],
     )
-    add_command(subparsers, "fit", "add one effect to the model and fit it", _fit_args, _fit)
+    add_command(
+        subparsers,
+        "fit",
+        "add one effect to the model and fit it",
+        _fit_args,
+        _fit,
+        requires=REQUIRES["fit"],
+    )
     add_command(
         subparsers,
         "report",
         "draw compare / diagnose / fit rounds into PNG files and one HTML page",
         _report_args,
         _report,
+        requires=REQUIRES["report"],
     )

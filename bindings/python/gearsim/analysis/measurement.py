@@ -60,6 +60,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .._outputs import atomic_writer, printable
+from ..columns import OPTIONAL, RIGS, RigColumns
 from ..errors import caller_stacklevel
 from .errors import MeasurementError
 from .signals import describe_gap, sampling_gaps
@@ -91,9 +92,11 @@ class MeasurementWarning(UserWarning):
 
 @dataclass(frozen=True)
 class RigSpec:
-    """The canonical columns of one rig (contract section 1).
+    """The canonical columns of one rig (contract section 1), by role.
 
-    driven_*: names used in texts for the driven side (follower shaft or rack)."""
+    Derived from :data:`gearsim.columns.RIGS`, the one definition of the
+    columns, which the HIL recording uses too. driven_*: the driven side
+    (follower shaft or rack), as texts name it."""
 
     block: str
     speed_input: str
@@ -106,6 +109,27 @@ class RigSpec:
     driven_speed_unit: str
     driven_force_unit: str
     driven_name: str
+
+    @classmethod
+    def from_columns(cls, rig: RigColumns) -> RigSpec:
+        return cls(
+            block=rig.block,
+            speed_input=rig.speed_input.name,
+            load_input=rig.load_input.name,
+            torque_output=rig.torque_output.name,
+            speed_output=rig.speed_output.name,
+            speed_unit=rig.speed_input.unit,
+            load_unit=rig.load_input.unit,
+            torque_unit=rig.torque_output.unit,
+            driven_speed_unit=rig.speed_output.unit,
+            driven_force_unit=rig.driven_force_unit,
+            driven_name=rig.driven,
+        )
+
+    @property
+    def columns(self) -> RigColumns:
+        """The columns of this rig, with the rig signal each maps to."""
+        return RIGS[self.block]
 
     @property
     def inputs(self) -> tuple[str, str]:
@@ -120,47 +144,14 @@ class RigSpec:
         return ("time", self.speed_input, self.load_input, self.torque_output, self.speed_output)
 
     def unit(self, column: str) -> str:
-        return {
-            "time": "s",
-            self.speed_input: self.speed_unit,
-            self.load_input: self.load_unit,
-            self.torque_output: self.torque_unit,
-            self.speed_output: self.driven_speed_unit,
-            "temperature": "K",
-            "ambient_temperature": "K",
-        }.get(column, "")
+        """The SI unit of ``column`` ("" for a column this rig does not have)."""
+        col = self.columns.column(column)
+        return col.unit if col is not None else ""
 
 
-RIG_SPECS: dict[str, RigSpec] = {
-    "simple_gear": RigSpec(
-        block="simple_gear",
-        speed_input="base_speed",
-        load_input="load_torque",
-        torque_output="base_torque",
-        speed_output="follower_speed",
-        speed_unit="rad/s",
-        load_unit="N*m",
-        torque_unit="N*m",
-        driven_speed_unit="rad/s",
-        driven_force_unit="N*m",
-        driven_name="follower",
-    ),
-    "rack_pinion": RigSpec(
-        block="rack_pinion",
-        speed_input="pinion_speed",
-        load_input="load_force",
-        torque_output="pinion_torque",
-        speed_output="rack_velocity",
-        speed_unit="rad/s",
-        load_unit="N",
-        torque_unit="N*m",
-        driven_speed_unit="m/s",
-        driven_force_unit="N",
-        driven_name="rack",
-    ),
-}
+RIG_SPECS: dict[str, RigSpec] = {block: RigSpec.from_columns(rig) for block, rig in RIGS.items()}
 
-OPTIONAL_INPUTS: tuple[str, ...] = ("temperature", "ambient_temperature")
+OPTIONAL_INPUTS: tuple[str, ...] = tuple(col.name for col in OPTIONAL)
 
 
 @dataclass(frozen=True)
@@ -381,8 +372,8 @@ def _zstd_decompress(data: bytes, shown: str) -> bytes:
         import zstandard
     except ImportError:
         raise MeasurementError(
-            "is zstd-compressed; reading it needs the Python package 'zstandard' "
-            "(pip install zstandard), or decompress it first (zstd -d)",
+            "is zstd-compressed; reading it needs the Python package 'zstandard' of the "
+            "analysis extra (pip install 'gearsim[analysis]'), or decompress it first (zstd -d)",
             file=shown,
         ) from None
     dctx = zstandard.ZstdDecompressor()

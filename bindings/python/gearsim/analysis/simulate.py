@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from ..columns import AMBIENT_TEMPERATURE, TEMPERATURE
 from .measurement import Measurement
 from .signals import auto_cutoff, zero_phase_lowpass
 
@@ -78,8 +79,8 @@ def prepare_inputs(meas: Measurement, input_filter: float | str | None = "auto")
     spec = meas.spec
     speed = cond(spec.speed_input)
     load = cond(spec.load_input)
-    temp = cond("temperature") if meas.has_temperature else None
-    amb = cond("ambient_temperature") if meas.has_ambient else None
+    temp = cond(TEMPERATURE.name) if meas.has_temperature else None
+    amb = cond(AMBIENT_TEMPERATURE.name) if meas.has_ambient else None
     return Inputs(speed, load, temp, amb, meas.dt, cutoffs)
 
 
@@ -115,16 +116,19 @@ def _run(model: Any, meas: Measurement, inputs: Inputs) -> tuple[Any, dict[str, 
     two simulated outputs under their canonical names."""
     use_temperature = inputs.measured_temperature is not None
     rig = model.rig(dt=inputs.dt, temperature_input=use_temperature)
-    kw: dict[str, Any] = {"base_speed": inputs.base_speed, "load": inputs.load}
-    if inputs.ambient_temperature is not None:
-        kw["ambient_temperature"] = inputs.ambient_temperature
-    if use_temperature:
-        kw["measured_temperature"] = inputs.measured_temperature
+    # which rig input each column drives and which rig output each measured
+    # output is compared with: gearsim.columns, shared with the HIL recording
+    cols = meas.spec.columns
+    given = {
+        cols.speed_input: inputs.base_speed,
+        cols.load_input: inputs.load,
+        AMBIENT_TEMPERATURE: inputs.ambient_temperature,
+        TEMPERATURE: inputs.measured_temperature,
+    }
+    kw: dict[str, Any] = {str(col.rig_input): x for col, x in given.items() if x is not None}
     res = rig.run(**kw)
-    spec = meas.spec
     return res, {
-        spec.torque_output: np.asarray(res.base_torque, dtype=float),
-        spec.speed_output: np.asarray(res.follower_speed, dtype=float),
+        col.name: np.asarray(getattr(res, str(col.rig_output)), dtype=float) for col in cols.outputs
     }
 
 

@@ -24,40 +24,77 @@ encodes and decodes:
 
 from __future__ import annotations
 
-from .bridge import (
-    IGNORE_REASONS,
-    LATE_REASONS,
-    REJECT_REASONS,
-    Bridge,
-    BridgeError,
-    Counters,
-    LoopStats,
-)
-from .codec import DbcError, FrameSpec, Rejection, RigDbc, SignalSpec, shipped_dbc
-from .recording import COLUMNS, Recording, RecordingError, log_to_measurement, write_csv
-from .replay import ReplayResult, read_log, replay, replay_messages
+import importlib
+import sys
+import types
+from typing import Any
 
-__all__ = [
-    "Bridge",
-    "BridgeError",
-    "Counters",
-    "LoopStats",
-    "REJECT_REASONS",
-    "LATE_REASONS",
-    "IGNORE_REASONS",
-    "RigDbc",
-    "DbcError",
-    "FrameSpec",
-    "SignalSpec",
-    "Rejection",
-    "shipped_dbc",
-    "replay",
-    "replay_messages",
-    "read_log",
-    "ReplayResult",
-    "log_to_measurement",
-    "write_csv",
-    "Recording",
-    "RecordingError",
-    "COLUMNS",
-]
+# name -> submodule. The submodules import python-can and cantools (the hil
+# extra); they are imported on first use, so that ``gearsim hil --help`` and
+# the ``gearsim`` command itself work without the extra, and a missing extra is
+# named when something of it is used.
+_EXPORTS: dict[str, str] = {
+    "Bridge": "bridge",
+    "BridgeError": "bridge",
+    "Counters": "bridge",
+    "LoopStats": "bridge",
+    "REJECT_REASONS": "bridge",
+    "LATE_REASONS": "bridge",
+    "IGNORE_REASONS": "bridge",
+    "RigDbc": "codec",
+    "DbcError": "codec",
+    "FrameSpec": "codec",
+    "SignalSpec": "codec",
+    "Rejection": "codec",
+    "shipped_dbc": "codec",
+    "replay": "replay",
+    "replay_messages": "replay",
+    "read_log": "replay",
+    "ReplayResult": "replay",
+    "log_to_measurement": "recording",
+    "write_csv": "recording",
+    "Recording": "recording",
+    "RecordingError": "recording",
+    "COLUMNS": "recording",
+}
+
+__all__ = list(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    try:
+        submodule = _EXPORTS[name]
+    except KeyError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    from .._extras import missing_extra
+
+    try:
+        module = importlib.import_module(f".{submodule}", __name__)
+    except ModuleNotFoundError as exc:
+        err = missing_extra(exc, "gearsim.hil")
+        if err is None:
+            raise
+        raise err from exc
+    value = getattr(module, name)
+    globals()[name] = value  # later look-ups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS))
+
+
+class _Package(types.ModuleType):
+    """The import system binds each submodule on its package once it has
+    loaded; ``replay`` is both a submodule and the function exported under that
+    name. Loaded eagerly, the function was bound last and won; loaded lazily,
+    the submodule would shadow it whenever something imported it first. An
+    export keeps its name here, and the submodule stays in sys.modules."""
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name in _EXPORTS and isinstance(value, types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package

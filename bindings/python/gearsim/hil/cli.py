@@ -11,8 +11,10 @@ Hooked into the ``gearsim`` command by gearsim/cli.py through
 (``python -m gearsim.hil``). Exit status: 0 success, 2 bad input (one line on
 standard error, no traceback), 1 internal failure (one line; the traceback only
 with GEARSIM_DEBUG set), 130 interrupted, 141 when standard output is a pipe
-closed by its reader (``... -o - | head``; nothing printed). ``--json`` prints
-exactly one JSON object on standard output.
+closed by its reader (``... -o - | head``; nothing printed). Without the hil
+extra (python-can, cantools) every command exits with status 2 and one line
+naming it: ``pip install 'gearsim[hil]'``. ``--json`` prints exactly one JSON
+object on standard output.
 
 Outputs (``-o``, ``--log``) are checked before any work starts (not an input of
 the command, not a directory, in a writable directory, a log format python-can
@@ -33,6 +35,7 @@ from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
+from .._extras import EXTRAS, missing_extra, require
 from .._outputs import atomic_write_bytes, check_output, printable, say, stdout_to_devnull
 from ..errors import GearsimError, InputError
 
@@ -279,6 +282,9 @@ def run_args(args: argparse.Namespace) -> int:
     prog = f"gearsim hil {args.hil_command}"
     _quiet_python_can()
     try:
+        # every command decodes or encodes through python-can and cantools (the
+        # DBC module imports both): checked here, before any input is read
+        require(f"'{prog}'", EXTRAS["hil"])
         status = handlers[args.hil_command](args)
         sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
         return status
@@ -294,6 +300,10 @@ def run_args(args: argparse.Namespace) -> int:
         say(f"{prog}: error: {_one_line(exc)}")
         return 2
     except Exception as exc:  # internal failure: one line, the traceback on request
+        missing = missing_extra(exc, f"'{prog}'")
+        if missing is not None:  # the hil extra (or a part of it) is not installed
+            say(f"gearsim: {missing}")
+            return 2
         if os.environ.get("GEARSIM_DEBUG"):
             raise
         say(

@@ -4,7 +4,8 @@ canonical CSV of docs/measurement-format.md section 1, so that
 
 Columns: ``time, base_speed, load_torque, base_torque, follower_speed`` (gear
 rig) or ``time, pinion_speed, load_force, pinion_torque, rack_velocity`` (rack
-rig), plus ``temperature`` on request. Where each comes from (DBC roles):
+rig), plus ``temperature`` on request, as :mod:`gearsim.columns` defines them.
+Where each comes from (DBC roles, derived from the rig signal of each column):
 
 - outputs: ``out.base_torque`` and ``out.follower_speed`` (feedback);
 - speed input: the measured ``out.base_speed`` (feedback) or the command
@@ -42,6 +43,7 @@ import can
 import numpy as np
 
 from .._outputs import atomic_writer, printable
+from ..columns import RIGS, TEMPERATURE, Column
 from ..errors import InputError
 from .codec import Rejection, RigDbc
 from .replay import DEFAULT_MAX_GAP, TimeCheck, read_log
@@ -58,16 +60,20 @@ __all__ = [
 #: Largest number of grid samples log_to_measurement makes by default (``--max-samples``).
 DEFAULT_MAX_SAMPLES = 5_000_000
 
-#: Canonical columns per rig: (speed input, load input, torque output, speed output).
-COLUMNS: dict[str, tuple[str, str, str, str]] = {
-    "simple_gear": ("base_speed", "load_torque", "base_torque", "follower_speed"),
-    "rack_pinion": ("pinion_speed", "load_force", "pinion_torque", "rack_velocity"),
-}
+#: Canonical columns per rig: (speed input, load input, torque output, speed output),
+#: from gearsim.columns (the one definition, which the analysis reads with).
+COLUMNS: dict[str, tuple[str, str, str, str]] = {block: rig.names for block, rig in RIGS.items()}
 
-_SOURCES = {
-    "speed": {"feedback": "out.base_speed", "command": "cmd.base_speed"},
-    "load": {"feedback": "in.load", "command": "cmd.load"},
-}
+
+def _feedback_role(col: Column) -> str:
+    """The DBC role of the feedback signal carrying ``col``: the rig output that
+    holds it, else the rig input as the bridge applied it."""
+    return f"out.{col.rig_output}" if col.rig_output else f"in.{col.rig_input}"
+
+
+def _command_role(col: Column) -> str:
+    """The DBC role of the command signal that sets input column ``col``."""
+    return f"cmd.{col.rig_input}"
 
 
 class RecordingError(InputError):
@@ -107,8 +113,8 @@ class Recording:
         }
 
 
-def _pick(dbc: RigDbc, which: str, source: str) -> str:
-    options = _SOURCES[which]
+def _pick(dbc: RigDbc, col: Column, source: str) -> str:
+    options = {"feedback": _feedback_role(col), "command": _command_role(col)}
     if source == "auto":
         fb = options["feedback"]
         return fb if dbc.feedback_signals(fb) else options["command"]
@@ -160,17 +166,11 @@ def log_to_measurement(
         raise RecordingError(
             f"{printable(str(dbc.path))} does not name its rig (GsBlock); give the rig"
         )
-    speed_role = _pick(dbc, "speed", source)
-    load_role = _pick(dbc, "load", source)
-    names = COLUMNS[dbc.block]
-    roles = {
-        names[0]: speed_role,
-        names[1]: load_role,
-        names[2]: "out.base_torque",
-        names[3]: "out.follower_speed",
-    }
+    rig = RIGS[dbc.block]
+    roles = {col.name: _pick(dbc, col, source) for col in rig.inputs}
+    roles.update({col.name: _feedback_role(col) for col in rig.outputs})
     if temperature:
-        roles["temperature"] = "out.temperature"
+        roles[TEMPERATURE.name] = _feedback_role(TEMPERATURE)
     sources = {col: _describe(dbc, role) for col, role in roles.items()}
 
     name = "the log"
@@ -196,7 +196,7 @@ def _measure(
     name: str,
 ) -> Recording:
     assert dbc.block is not None
-    names = COLUMNS[dbc.block]
+    torque_output = RIGS[dbc.block].torque_output.name
     wanted = set(roles.values())
     series: dict[str, tuple[list[float], list[float]]] = {r: ([], []) for r in wanted}
     rec = Recording(dbc.block, {}, 0.0, sources)
@@ -251,7 +251,7 @@ def _measure(
         if cycles:
             dt = max(cycles)
         else:
-            ts = np.asarray(series[roles[names[2]]][0])
+            ts = np.asarray(series[roles[torque_output]][0])
             dt = float(np.median(np.diff(ts))) if len(ts) > 1 else 0.0
     if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
         raise RecordingError(f"{name}: cannot infer a grid step (dt = {dt!r}); give --dt")
