@@ -1,342 +1,100 @@
 """cffi build script (API mode) of the extension module ``gearsim._gearsim``.
 
-This file is the one place where the C declarations seen by Python live.
-Enum values and ``#define`` constants are written ``...`` so that the C compiler
-fills them in from ``include/gearsim``; structs end with ``...;`` so that their
-layout comes from the compiler as well. The sources of ``src/`` are compiled
-into the extension (double precision: ``GS_SINGLE_PRECISION`` is not defined),
-so there is one copy of the physics, the C one. ``SHIM`` is the bindings' own
-C (no physics): the per-step entry point of ``Rig.step``.
+The C declarations seen by Python are not written here: ``generate_cdef()``
+runs the C preprocessor over the public umbrella header
+``include/gearsim/gearsim.h`` at build time and hands its output to cffi, so
+the cdef is the headers (tests/python/test_bindings_build.py checks it).
 
-Used by ``setup.py`` (``cffi_modules``); can also be run directly to build the
-extension in place: ``python bindings/python/gearsim_build.py``.
+- ``cc -E -P -std=c99 -nostdinc -DGS_API=`` expands the field lists of
+  gearsim/fields.h, the table sizes and the precision macros; ``-nostdinc``
+  with an empty stub ``stddef.h`` keeps libc's declarations out (cffi knows
+  ``size_t``). Nothing but the public headers is read: the internal structs of
+  ``src/`` never reach Python.
+- The object-like ``#define`` constants of the headers (``GS_TABLE_MAX``,
+  ``GS_VERSION_STRING``, ...), which the preprocessor consumes, are listed with
+  ``cc -E -dM`` (minus the compiler's predefined macros) and declared
+  ``#define NAME ...`` (integers, value from the compiler) or
+  ``static const char *const NAME;`` (strings).
+- Structs are declared in full, so cffi checks every field offset and struct
+  size against the C compiler when the type is first used, and the preamble
+  carries a table of the compiler's ``sizeof``/``offsetof`` of every public
+  struct (``gspy_layouts``) and the cdef itself (``GSPY_CDEF``) for the tests.
+
+The library sources ``src/*.c`` are compiled apart from cffi's generated
+wrapper, as the static library ``gearsim_core`` (``core_library()``, built by
+setuptools' ``build_clib`` from ``setup.py``), with the library's warning set
+``cmake/gearsim_warnings.txt`` (the list CMake reads) and the determinism
+flags of CMake's ``gearsim_configure``: ``-ffp-contract=off -fno-fast-math``.
+``GEARSIM_WERROR=1`` in the environment adds ``-Werror``. The wrapper (cffi's
+code and ``SHIM``, the bindings' own C: no physics) links against it. The
+extension is the double build (``GS_SINGLE_PRECISION`` is not defined).
+
+Used by ``setup.py`` (``cffi_modules`` names ``make_builder``, ``libraries``
+comes from ``core_library()``). ``python bindings/python/gearsim_build.py``
+builds the extension in place (``setup.py build_ext --inplace``), and
+``python bindings/python/gearsim_build.py --cdef`` prints the generated cdef.
 """
 
 from __future__ import annotations
 
+import os
+import re
+import shlex
+import subprocess
 import sys
+import sysconfig
+import tempfile
 from pathlib import Path
 
 from cffi import FFI
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent.parent  # repository root: include/ and src/ live there
+ROOT = HERE.parent.parent  # repository root: include/, src/ and cmake/ live there
 INCLUDE_DIR = ROOT / "include"
 SRC_DIR = ROOT / "src"
+UMBRELLA = INCLUDE_DIR / "gearsim" / "gearsim.h"
+WARNINGS_FILE = ROOT / "cmake" / "gearsim_warnings.txt"
+CORE_LIBRARY = "gearsim_core"
 
-CDEF = r"""
-#define GS_VERSION_MAJOR ...
-#define GS_VERSION_MINOR ...
-#define GS_VERSION_PATCH ...
-static const char *const GS_VERSION_STRING;
-#define GS_TABLE_MAX ...
-#define GS_MAX_SUBSTEPS ...
-#define GS_RIG_INPUT_FIELDS ...
-#define GS_RIG_OUTPUT_FIELDS ...
-
-typedef double... gs_real;
-
-typedef enum {
-    GS_OK = ...,
-    GS_E_NULL = ...,
-    GS_E_NOT_FINITE = ...,
-    GS_E_NOT_POSITIVE = ...,
-    GS_E_NEGATIVE = ...,
-    GS_E_EFFICIENCY_RANGE = ...,
-    GS_E_NOMINAL_EFFICIENCY = ...,
-    GS_E_IDLE_TORQUE_TOO_LARGE = ...,
-    GS_E_OPTION = ...,
-    GS_E_TABLE_LENGTH = ...,
-    GS_E_TABLE_NOT_INCREASING = ...,
-    GS_E_TABLE_SIZE_MISMATCH = ...,
-    GS_E_BACKLASH_POSITION = ...,
-    GS_E_TRANSITION_REGION = ...,
-    GS_E_STEP_SIZE = ...,
-    GS_E_SUBSTEPS = ...,
-    GS_E_MAGNITUDE = ...
-} gs_status;
-
-const char *gs_status_str(gs_status status);
-
-typedef struct {
-    gs_status status;
-    const char *parameter;
-    const char *message;
-    ...;
-} gs_error;
-
-typedef enum {
-    GS_FRICTION_NONE = ...,
-    GS_FRICTION_CONSTANT_EFFICIENCY = ...,
-    GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY = ...,
-    GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY = ...,
-    GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY = ...
-} gs_friction_model;
-
-typedef enum {
-    GS_SMOOTHING_PASSIVE = ...,
-    GS_SMOOTHING_SIMSCAPE = ...
-} gs_loss_smoothing;
-
-typedef enum {
-    GS_HARD_STOP_SMOOTH = ...,
-    GS_HARD_STOP_FULL_UNDAMPED = ...,
-    GS_HARD_STOP_FULL_DAMPED = ...
-} gs_hard_stop_model;
-
-typedef struct {
-    int enabled;
-    gs_hard_stop_model hard_stop_model;
-    gs_real linear_backlash_m;
-    gs_real base_radius_m;
-    gs_real transition_region_m;
-    gs_real stiffness_N_m;
-    gs_real damping_N_s_m;
-    gs_real initial_position_m;
-    int no_pull;
-    int lock_enabled;
-    gs_real contact_speed_threshold_m_s;
-    gs_real contact_release_force_N;
-    ...;
-} gs_backlash_params;
-
-typedef struct { ...; } gs_mesh_;
-
-/* ---- simple_gear.h */
-typedef enum {
-    GS_ROTATES_SAME = ...,
-    GS_ROTATES_OPPOSITE = ...
-} gs_output_rotation;
-
-typedef struct {
-    gs_real teeth_ratio;
-    gs_output_rotation output_shaft_rotates;
-    gs_friction_model friction_model;
-    gs_loss_smoothing loss_smoothing;
-    gs_real efficiency_const;
-    gs_real power_threshold_W;
-    gs_real idle_torque_Nm;
-    gs_real nominal_output_torque_Nm;
-    gs_real efficiency_nominal;
-    gs_real speed_threshold_rad_s;
-    int temperature_count;
-    gs_real temperature_vector_K[...];
-    gs_real efficiency_vector[...];
-    int load_count;
-    gs_real load_vector_Nm[...];
-    gs_real efficiency_matrix[...][...];
-    gs_backlash_params backlash;
-    gs_real viscous_coefficients[...];
-    gs_real thermal_mass_J_K;
-    gs_real initial_temperature_K;
-    ...;
-} gs_simple_gear_params;
-
-typedef struct { ...; } gs_simple_gear;
-
-typedef struct {
-    gs_real base_speed_rad_s;
-    gs_real follower_speed_rad_s;
-    gs_real follower_torque_Nm;
-    gs_real heat_flow_W;
-    gs_real temperature_K;
-    int use_temperature_input;
-    ...;
-} gs_gear_ports_in;
-
-typedef struct {
-    gs_real base_torque_Nm;
-    gs_real follower_torque_Nm;
-    gs_real follower_speed_rad_s;
-    gs_real mesh_loss_torque_Nm;
-    gs_real mesh_loss_power_W;
-    gs_real loss_power_W;
-    gs_real temperature_K;
-    gs_real backlash_position_m;
-    gs_real contact_force_N;
-    ...;
-} gs_gear_ports_out;
-
-gs_simple_gear_params gs_simple_gear_params_default(void);
-gs_status gs_simple_gear_init(gs_simple_gear *gear, const gs_simple_gear_params *params,
-                              gs_error *err);
-void gs_simple_gear_reset(gs_simple_gear *gear);
-void gs_simple_gear_step(gs_simple_gear *gear, gs_real dt_s, const gs_gear_ports_in *in,
-                         gs_gear_ports_out *out);
-
-/* ---- rack_pinion.h */
-typedef enum {
-    GS_PARAMETERIZE_PINION_RADIUS = ...,
-    GS_PARAMETERIZE_TOOTH_PARAMETERS = ...
-} gs_rack_parameterization;
-
-typedef enum {
-    GS_RACK_POSITIVE = ...,
-    GS_RACK_NEGATIVE = ...
-} gs_rack_direction;
-
-typedef struct {
-    gs_rack_parameterization parameterization;
-    gs_real pinion_radius_m;
-    gs_real teeth_count;
-    gs_real spacing_m;
-    gs_rack_direction rack_directionality;
-    gs_friction_model friction_model;
-    gs_loss_smoothing loss_smoothing;
-    gs_real efficiency_const;
-    int temperature_count;
-    gs_real temperature_vector_K[...];
-    gs_real efficiency_vector[...];
-    gs_real power_threshold_W;
-    gs_real pinion_viscous_coefficient;
-    gs_real rack_viscous_coefficient;
-    gs_real thermal_mass_J_K;
-    gs_real initial_temperature_K;
-    gs_backlash_params backlash;
-    ...;
-} gs_rack_pinion_params;
-
-typedef struct { ...; } gs_rack_pinion;
-
-typedef struct {
-    gs_real pinion_speed_rad_s;
-    gs_real rack_velocity_m_s;
-    gs_real rack_force_N;
-    gs_real heat_flow_W;
-    gs_real temperature_K;
-    int use_temperature_input;
-    ...;
-} gs_rack_ports_in;
-
-typedef struct {
-    gs_real pinion_torque_Nm;
-    gs_real rack_force_N;
-    gs_real rack_velocity_m_s;
-    gs_real mesh_loss_force_N;
-    gs_real mesh_loss_power_W;
-    gs_real loss_power_W;
-    gs_real temperature_K;
-    gs_real backlash_position_m;
-    gs_real contact_force_N;
-    ...;
-} gs_rack_ports_out;
-
-gs_rack_pinion_params gs_rack_pinion_params_default(void);
-gs_real gs_rack_pinion_radius(const gs_rack_pinion_params *params);
-gs_status gs_rack_pinion_init(gs_rack_pinion *rp, const gs_rack_pinion_params *params,
-                              gs_error *err);
-void gs_rack_pinion_reset(gs_rack_pinion *rp);
-void gs_rack_pinion_step(gs_rack_pinion *rp, gs_real dt_s, const gs_rack_ports_in *in,
-                         gs_rack_ports_out *out);
-
-/* ---- rig.h */
-typedef enum {
-    GS_BASE_SPEED_DRIVEN = ...,
-    GS_BASE_TORQUE_DRIVEN = ...
-} gs_base_drive;
-
-typedef enum {
-    GS_TEMPERATURE_FROM_MODEL = ...,
-    GS_TEMPERATURE_FROM_INPUT = ...
-} gs_temperature_source;
-
-typedef enum {
-    GS_RIG_SIMPLE_GEAR = ...,
-    GS_RIG_RACK_PINION = ...
-} gs_rig_block;
-
-typedef struct {
-    gs_real dt_s;
-    gs_base_drive base_drive;
-    gs_real base_inertia_kg_m2;
-    gs_real initial_base_speed_rad_s;
-    gs_real driven_inertia;
-    gs_real load_coulomb_friction;
-    gs_real load_coulomb_speed_threshold;
-    gs_real load_offset;
-    int heat_path;
-    gs_real thermal_resistance_K_W;
-    gs_temperature_source temperature_source;
-    gs_real accel_filter_time_constant_s;
-    int contact_substeps;
-    ...;
-} gs_rig_params;
-
-typedef struct {
-    gs_real base_speed_rad_s;
-    gs_real base_torque_Nm;
-    gs_real load;
-    gs_real ambient_temperature_K;
-    gs_real measured_temperature_K;
-    ...;
-} gs_rig_input;
-
-typedef struct {
-    gs_real base_torque_Nm;
-    gs_real base_speed_rad_s;
-    gs_real base_angle_rad;
-    gs_real follower_speed;
-    gs_real follower_position;
-    gs_real base_port_torque_Nm;
-    gs_real follower_port_torque;
-    gs_real mesh_loss_power_W;
-    gs_real loss_power_W;
-    gs_real port_power_W;
-    gs_real contact_energy_J;
-    gs_real temperature_K;
-    gs_real backlash_position_m;
-    gs_real contact_force_N;
-    gs_real follower_acceleration;
-    ...;
-} gs_rig_output;
-
-typedef struct {
-    gs_rig_block block;
-    gs_real dt;
-    int substeps;
-    ...;
-} gs_rig;
-
-typedef struct {
-    int contact_substeps;
-    gs_real contact_h_omega_n;
-    int substeps_capped;
-    ...;
-} gs_rig_info;
-
-gs_rig_params gs_rig_params_default(void);
-void gs_rig_get_info(const gs_rig *rig, gs_rig_info *info);
-gs_status gs_rig_init_gear(gs_rig *rig, const gs_simple_gear_params *gear,
-                           const gs_rig_params *params, gs_error *err);
-gs_status gs_rig_init_rack(gs_rig *rig, const gs_rack_pinion_params *rack,
-                           const gs_rig_params *params, gs_error *err);
-void gs_rig_reset(gs_rig *rig);
-void gs_rig_step(gs_rig *rig, const gs_rig_input *in, gs_rig_output *out);
-void gs_rig_run(gs_rig *rig, size_t n, const gs_rig_input *in, gs_rig_output *out);
-
-/* ---- the bindings' own C (SHIM below), for Rig.step */
+# The bindings' own declarations, appended to the generated cdef: the stepper
+# of Rig.step (SHIM below) and the compiler's layout table (_layout_table).
+BINDINGS_CDEF = r"""
 typedef struct {
     gs_rig_output out;
-    gs_rig *rig;
-    ...;
+    const gs_rig_consts *consts;
+    gs_rig_state *state;
 } gspy_stepper;
 
 int gspy_rig_step(gspy_stepper *s, double base_speed, double base_torque, double load,
                   double ambient_temperature, double measured_temperature);
+
+typedef struct {
+    const char *type;    /* a public struct */
+    const char *member;  /* "" for the struct itself */
+    size_t offset;       /* offsetof(type, member), 0 for the struct */
+    size_t size;         /* sizeof the member or of the struct */
+} gspy_layout;
+
+const gspy_layout *gspy_layouts(size_t *count);
+
+static const char *const GSPY_CDEF;  /* this cdef, as the extension was built with it */
 """
 
-# C compiled into the extension beside the core (not part of the C API): a
+# C compiled into the wrapper beside the cffi code (not part of the C API): a
 # per-step entry point for Rig.step. One cffi call with the five inputs by value
 # replaces writing them into a gs_rig_input from Python, checking them and
-# calling gs_rig_step with three pointers (which cffi converts one by one).
+# calling gs_rig_step with four pointers (which cffi converts one by one).
 SHIM = r"""
 #include <math.h>
+#include <stddef.h>
 
 /* The output of the last step of one rig (first: Rig.step reads it from the
-   start of the struct), and that rig (owned by the caller). */
+   start of the struct), and that rig's constants and state (owned by the
+   caller). */
 typedef struct {
     gs_rig_output out;
-    gs_rig *rig;
+    const gs_rig_consts *consts;
+    gs_rig_state *state;
 } gspy_stepper;
 
 /* One gs_rig_step with these inputs into s->out; returns 0. Returns 1 without
@@ -344,55 +102,222 @@ typedef struct {
 static int gspy_rig_step(gspy_stepper *s, double base_speed, double base_torque, double load,
                          double ambient_temperature, double measured_temperature)
 {
-    gs_rig_input in = {0};
+    gs_rig_input in;
     if (!(isfinite(base_speed) && isfinite(base_torque) && isfinite(load) &&
           isfinite(ambient_temperature) && isfinite(measured_temperature)))
         return 1;
-    in.base_speed_rad_s = base_speed;
-    in.base_torque_Nm = base_torque;
+    in.base_speed = base_speed;
+    in.base_torque = base_torque;
     in.load = load;
-    in.ambient_temperature_K = ambient_temperature;
-    in.measured_temperature_K = measured_temperature;
-    gs_rig_step(s->rig, &in, &s->out);
+    in.ambient_temperature = ambient_temperature;
+    in.measured_temperature = measured_temperature;
+    gs_rig_step(s->consts, s->state, &in, &s->out);
     return 0;
 }
 """
 
+_MACRO = re.compile(r"#define\s+([A-Za-z_]\w*)(\(?)\s*(.*)")
+_FLOAT = re.compile(r"^\(?\s*[-+]?(\d+\.\d*|\.\d+|\d+[eE])")
+_ATTRIBUTE = re.compile(r"__attribute__\s*\(\((?:[^()]|\([^()]*\))*\)\)")
+
 
 def _path(path: Path, absolute: bool) -> str:
     # setuptools wants paths relative to setup.py (the repository root, which
-    # is the working directory of a pip build); cffi's own compile() changes
-    # directory and needs absolute ones.
+    # is the working directory of a pip build); absolute ones elsewhere.
     return path.as_posix() if absolute else path.relative_to(ROOT).as_posix()
 
 
-def _compile_args() -> list[str]:
+def warning_flags() -> list[str]:
+    """The library's warning set: cmake/gearsim_warnings.txt, one flag a line,
+    '#' starts a comment."""
+    flags = []
+    for line in WARNINGS_FILE.read_text().splitlines():
+        flag = line.split("#", 1)[0].strip()
+        if flag:
+            flags.append(flag)
+    return flags
+
+
+def core_cflags() -> list[str]:
+    """Flags of the library sources src/*.c (appended after Python's own)."""
+    if sys.platform == "win32":  # MSVC: no GCC warning syntax; strict IEEE
+        return ["/fp:precise"]
+    # Determinism (docs/style.md 9): no FMA contraction, never -ffast-math, as
+    # CMake's gearsim_configure; hidden visibility as the library's build.
+    flags = ["-std=c99", *warning_flags(), "-ffp-contract=off", "-fno-fast-math"]
+    flags.append("-fvisibility=hidden")
+    if os.environ.get("GEARSIM_WERROR", "") not in ("", "0"):
+        flags.append("-Werror")
+    return flags
+
+
+def wrapper_cflags() -> list[str]:
+    """Flags of cffi's wrapper (no physics; cffi's code is not warning-clean)."""
     if sys.platform == "win32":
         return ["/fp:precise"]
-    # Determinism (docs/style.md 9): no FMA contraction, never -ffast-math.
     return ["-std=c99", "-ffp-contract=off", "-fno-fast-math"]
 
 
-def make_builder(absolute: bool = False) -> FFI:
-    """The FFI builder of gearsim._gearsim (src/*.c compiled in, double precision)."""
+def core_library(absolute: bool = False) -> tuple[str, dict]:
+    """setuptools' build_clib entry of the static library gearsim_core (src/*.c)."""
     sources = sorted(SRC_DIR.glob("*.c"))
     if not sources:
         raise RuntimeError(f"gearsim: no C sources found in {SRC_DIR}")
+    # build_clib recompiles when one of these is newer than the objects.
+    deps = sorted(SRC_DIR.glob("*.h")) + sorted((INCLUDE_DIR / "gearsim").glob("*.h"))
+    deps += [WARNINGS_FILE, Path(__file__).resolve(), ROOT / "setup.py"]
+    return (
+        CORE_LIBRARY,
+        {
+            "sources": [_path(p, absolute) for p in sources],
+            "include_dirs": [_path(INCLUDE_DIR, absolute), _path(SRC_DIR, absolute)],
+            "cflags": core_cflags(),
+            "obj_deps": {"": [_path(p, absolute) for p in deps if p.exists()]},
+        },
+    )
+
+
+def preprocessor() -> list[str]:
+    """The C compiler used as preprocessor: $CC, else Python's, else cc."""
+    cc = os.environ.get("CC") or sysconfig.get_config_var("CC") or "cc"
+    return shlex.split(cc)
+
+
+def _preprocess(options: list[str], source: Path, stub_dir: Path, defines: list[str]) -> str:
+    command = [
+        *preprocessor(),
+        "-E",
+        "-std=c99",
+        "-nostdinc",
+        "-I",
+        str(stub_dir),
+        "-I",
+        str(INCLUDE_DIR),
+        "-DGS_API=",
+        *defines,
+        *options,
+        "-x",
+        "c",
+        str(source),
+    ]
+    try:
+        done = subprocess.run(command, capture_output=True, text=True, check=False)
+    except OSError as exc:
+        raise RuntimeError(
+            f"gearsim: cannot run the C preprocessor {command[0]!r} ({exc}); set CC"
+        ) from None
+    if done.returncode != 0:
+        raise RuntimeError(
+            f"gearsim: preprocessing {source} failed:\n{shlex.join(command)}\n{done.stderr}"
+        )
+    return done.stdout
+
+
+def _constants(macros: str, predefined: str) -> list[str]:
+    """cdef lines of the headers' object-like constants (upper-case names with
+    a value; header guards, the function-like macros and the lower-case
+    precision renames are left out)."""
+    known = set(predefined.splitlines())
+    lines = []
+    for line in sorted(set(macros.splitlines()) - known):
+        match = _MACRO.match(line)
+        if not match:
+            continue
+        name, function_like, value = match.groups()
+        if function_like or not value or name != name.upper():
+            continue
+        if value.startswith('"'):
+            lines.append(f"static const char *const {name};")
+        elif _FLOAT.match(value):
+            lines.append(f"static const double {name};")
+        else:
+            lines.append(f"#define {name} ...")
+    return lines
+
+
+def _clean(declarations: str) -> str:
+    """What pycparser (cffi) does not take: GNU attributes and __extension__."""
+    text = _ATTRIBUTE.sub("", declarations)
+    text = text.replace("__extension__", "")
+    return "\n".join(line.strip() for line in text.splitlines() if line.strip()) + "\n"
+
+
+def generate_cdef(single_precision: bool = False) -> str:
+    """The cdef of the public headers (include/gearsim/gearsim.h), without the
+    bindings' own declarations (BINDINGS_CDEF)."""
+    defines = ["-DGS_SINGLE_PRECISION"] if single_precision else []
+    with tempfile.TemporaryDirectory(prefix="gearsim-cdef-") as tmp:
+        stub_dir = Path(tmp)
+        # cffi knows size_t; nothing else of <stddef.h> is used by the headers.
+        (stub_dir / "stddef.h").write_text("/* stub: cffi declares size_t */\n")
+        empty = stub_dir / "empty.c"
+        empty.write_text("")
+        declarations = _preprocess(["-P"], UMBRELLA, stub_dir, defines)
+        macros = _preprocess(["-dM"], UMBRELLA, stub_dir, defines)
+        predefined = _preprocess(["-dM"], empty, stub_dir, defines)
+    header = "/* generated by gearsim_build.py from include/gearsim/gearsim.h */\n"
+    return header + "\n".join(_constants(macros, predefined)) + "\n" + _clean(declarations)
+
+
+def _struct_names(cdef: str) -> list[str]:
+    """Typedef names of the structs of a cdef (typedef struct {...} name;)."""
+    return re.findall(r"^typedef\s+struct\s*\w*\s*\{[^}]*\}\s*(\w+)\s*;", cdef, re.M | re.S)
+
+
+def _layout_table(cdef: str) -> str:
+    """C of gspy_layouts(): the compiler's sizeof of every public struct and
+    the offsetof and sizeof of each of its members."""
+    probe = FFI()
+    probe.cdef(cdef)
+    rows = []
+    for name in _struct_names(cdef):
+        rows.append(f'    {{"{name}", "", 0, sizeof({name})}},')
+        for member, _field in probe.typeof(name).fields:
+            rows.append(
+                f'    {{"{name}", "{member}", offsetof({name}, {member}), '
+                f"sizeof((({name} *)0)->{member})}},"
+            )
+    body = "\n".join(rows)
+    return (
+        "typedef struct { const char *type; const char *member; size_t offset; size_t size; }"
+        " gspy_layout;\n"
+        f"static const gspy_layout gspy_layout_rows[] = {{\n{body}\n}};\n"
+        "static const gspy_layout *gspy_layouts(size_t *count)\n{\n"
+        "    *count = sizeof(gspy_layout_rows) / sizeof(gspy_layout_rows[0]);\n"
+        "    return gspy_layout_rows;\n}\n"
+    )
+
+
+def _c_string(text: str) -> str:
+    """text as a C string literal (one literal a line, concatenated)."""
+    literals = [
+        '    "' + line.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+        for line in text.splitlines(keepends=True)
+    ]
+    return "\n".join(literals) or '""'
+
+
+def make_builder(absolute: bool = False) -> FFI:
+    """The FFI builder of gearsim._gearsim (double precision), linked against
+    gearsim_core (core_library(), built before it by build_clib)."""
+    cdef = generate_cdef()
     builder = FFI()
-    builder.cdef(CDEF)
+    builder.cdef(cdef + BINDINGS_CDEF)
+    stored = f"static const char *const GSPY_CDEF =\n{_c_string(cdef + BINDINGS_CDEF)};\n"
     builder.set_source(
         "gearsim._gearsim",
-        '#include "gearsim/gearsim.h"\n' + SHIM,
-        sources=[_path(p, absolute) for p in sources],
-        include_dirs=[_path(INCLUDE_DIR, absolute), _path(SRC_DIR, absolute)],
-        libraries=[] if sys.platform == "win32" else ["m"],
-        extra_compile_args=_compile_args(),
+        '#include "gearsim/gearsim.h"\n' + SHIM + _layout_table(cdef) + stored,
+        include_dirs=[_path(INCLUDE_DIR, absolute)],
+        libraries=[CORE_LIBRARY] + ([] if sys.platform == "win32" else ["m"]),
+        extra_compile_args=wrapper_cflags(),
     )
     return builder
 
 
-ffibuilder = make_builder()
-
 if __name__ == "__main__":
-    # In-place build for development: puts gearsim/_gearsim.*.so in the package.
-    make_builder(absolute=True).compile(tmpdir=str(HERE), verbose=True)
+    if sys.argv[1:] == ["--cdef"]:
+        sys.stdout.write(generate_cdef() + BINDINGS_CDEF)
+    else:
+        # In-place build for development: puts gearsim/_gearsim.*.so in the
+        # package (build_clib, then the wrapper).
+        sys.exit(subprocess.call([sys.executable, "setup.py", "build_ext", "--inplace"], cwd=ROOT))

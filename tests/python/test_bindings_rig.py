@@ -55,6 +55,52 @@ def test_output_names_are_the_documented_ones():
     )
 
 
+def test_names_units_and_docs_come_from_the_c_tables():
+    from gearsim import rig as rig_module
+
+    assert gearsim.INPUT_NAMES == tuple(f.name for f in rig_module.INPUT_FIELDS)
+    assert gearsim.OUTPUT_NAMES == tuple(f.name for f in rig_module.OUTPUT_FIELDS)
+    gear, rack = gearsim.GearRig(), gearsim.RackRig()
+    assert gear.output_units["follower_speed"] == "rad/s"
+    assert rack.output_units["follower_speed"] == "m/s"
+    assert rack.output_units["follower_port_torque"] == "N"
+    assert gear.input_units == {
+        "base_speed": "rad/s",
+        "base_torque": "N*m",
+        "load": "N*m",
+        "ambient_temperature": "K",
+        "measured_temperature": "K",
+    }
+    assert rack.input_units["load"] == "N"
+    assert set(gear.state_units) == set(rig_module.STATE_NAMES)
+    doc = gearsim.RigResult.follower_speed.__doc__
+    assert "rad/s gear rig" in doc and "m/s rack rig" in doc
+    assert gearsim.RigResult.loss_power.__doc__.endswith("(W)")
+
+
+def test_state_by_name():
+    from gearsim import rig as rig_module
+
+    rig = gearsim.GearRig(backlash_enabled=True, friction_model="constant_efficiency")
+    state = rig.state
+    assert tuple(state) == rig_module.STATE_NAMES
+    assert state["started"] == 0 and isinstance(state["started"], int)
+    assert state["temperature"] == 300.0
+    out = rig.run(base_speed=_speed(200), load=0.3)
+    state = rig.state
+    assert state["started"] == 1 and state["contact_locked"] in (0, 1)
+    for name in ("base_speed", "base_angle", "follower_speed", "follower_position"):
+        assert state[name] == out[name][-1], name
+    for name in ("temperature", "backlash_position"):
+        assert state[name] == out[name][-1], name
+    state["base_speed"] = 1e9  # a copy: the rig is unchanged
+    assert rig.state["base_speed"] == out.base_speed[-1]
+    rig.reset()
+    assert rig.state["started"] == 0 and rig.state["base_angle"] == 0.0
+    assert rig.follower_per_base == pytest.approx(-0.5)
+    assert gearsim.RackRig(pinion_radius=0.02).follower_per_base == pytest.approx(0.02)
+
+
 def test_step_returns_scalars_and_matches_run():
     a = gearsim.RackRig(friction_model="constant_efficiency", rack_mass=2.0)
     b = gearsim.RackRig(friction_model="constant_efficiency", rack_mass=2.0)
@@ -174,9 +220,23 @@ def test_snapshot_restore_and_copy():
     other = gearsim.RackRig(backlash_enabled=True, rack_mass=1.5)
     other.restore(pickle.loads(pickle.dumps(snap)))
     np.testing.assert_array_equal(other.run(base_speed=w[200:]).as_array(), tail)
-    # but not into a rig with other parameters
-    with pytest.raises(gearsim.GearsimError):
-        gearsim.RackRig(backlash_enabled=True, rack_mass=2.0).restore(snap)
+    # a snapshot is the state alone: a rig with other parameters continues from
+    # it under its own (a re-tuned rig), like a fresh rig stepped to that state
+    heavy = gearsim.RackRig(backlash_enabled=True, rack_mass=2.0)
+    heavy.restore(snap)
+    assert heavy.snapshot() == snap and heavy.state == other_state(snap)
+    retuned = heavy.run(base_speed=w[200:]).as_array()
+    assert np.all(np.isfinite(retuned)) and not np.array_equal(retuned, tail)
+    # but not into a rig of the other block
+    with pytest.raises(gearsim.GearsimError, match="rack_pinion"):
+        gearsim.GearRig(backlash_enabled=True).restore(snap)
+
+
+def other_state(snap):
+    """Rig.state of a fresh rig of the snapshot's kind restored from it."""
+    rig = gearsim.RackRig(backlash_enabled=True, rack_mass=1.5)
+    rig.restore(snap)
+    return rig.state
 
 
 def test_rig_from_block_object_and_split_keywords():

@@ -22,9 +22,12 @@ from .model import Model
 from .params import param_units
 from .rig import INPUT_NAMES, OUTPUT_NAMES, GearRig, RackRig, Rig, RigResult, RigSnapshot
 
+#: The package's version: GS_VERSION_STRING of include/gearsim/version.h (the one
+#: version source; setup.py reads the same line).
 __version__: str = _ffi.string(_lib.GS_VERSION_STRING).decode()
-#: Version of the compiled C core (GS_VERSION_STRING).
-C_VERSION: str = __version__
+#: Version of the compiled C library (gs_version()); equal to __version__
+#: unless the extension was built from other sources than its headers.
+C_VERSION: str = _ffi.string(_lib.gs_version()).decode()
 #: Capacity of every interpolation table (GS_TABLE_MAX of the compiled core).
 TABLE_MAX: int = int(_lib.GS_TABLE_MAX)
 #: Largest contact sub-step count (GS_MAX_SUBSTEPS).

@@ -1,5 +1,7 @@
 """The two blocks, SimpleGear and RackPinion: validated parameter sets around the
-C ``gs_simple_gear`` / ``gs_rack_pinion`` (docs/physics.md sections 1-6, 9, 10).
+C blocks of include/gearsim/simple_gear.h and rack_pinion.h, each an opaque
+constants block (``gs_simple_gear_consts`` / ``gs_rack_pinion_consts``, filled
+once by init) and a ``gs_block_state`` (docs/physics.md sections 1-6, 9, 10).
 
 Most users step a rig (gearsim.rig); the blocks also step on their own with the
 block's causal forms (physics.md section 8): rigid mesh takes a speed and the
@@ -29,7 +31,7 @@ class Block:
     """
 
     kind: ClassVar[str] = ""
-    _ctype: ClassVar[str] = ""
+    _consts_ctype: ClassVar[str] = ""
     _specs: ClassVar[dict[str, P.Param]] = {}
 
     def __init__(self, **params: Any) -> None:
@@ -40,14 +42,16 @@ class Block:
         c_params = P.new_struct(ctype)
         c_params[0] = getattr(lib, default_fn)()
         P.write_struct(specs, full, c_params)
-        c_block = ffi.new(self._ctype + " *")
+        consts = ffi.new(self._consts_ctype + " *")
+        state = ffi.new("gs_block_state *")
         err = ffi.new("gs_error *")
-        status = self._init(c_block, c_params, err)
+        status = self._init(consts, state, c_params, err)
         check(status, err, value_of=full.__getitem__)
         self._given = given
         self._full = full
         self._c_params = c_params
-        self._c = c_block
+        self._consts = consts  # read-only after init
+        self._state = state
 
     # -- parameters ---------------------------------------------------------
     @classmethod
@@ -103,23 +107,24 @@ class Block:
     # -- block-level stepping -------------------------------------------------
     def reset(self) -> None:
         """Back to the initial state (temperature, backlash position)."""
-        self._reset(self._c)
+        self._reset(self._consts, self._state)
 
     def snapshot(self) -> bytes:
-        """The block's C state (plain data) as bytes."""
-        return bytes(ffi.buffer(self._c))
+        """The block's state (the C gs_block_state, plain data) as bytes."""
+        return bytes(ffi.buffer(self._state))
 
     def restore(self, state: bytes) -> None:
-        """Restore a snapshot() of this block."""
-        if len(state) != ffi.sizeof(self._ctype):
-            raise ValueError(f"snapshot of {len(state)} bytes, expected {ffi.sizeof(self._ctype)}")
-        ffi.memmove(self._c, state, len(state))
+        """Restore a snapshot() of this block (or of a block of the same kind)."""
+        size = ffi.sizeof("gs_block_state")
+        if len(state) != size:
+            raise ValueError(f"snapshot of {len(state)} bytes, expected {size}")
+        ffi.memmove(self._state, state, len(state))
 
     # implemented by the subclasses
-    def _init(self, c_block: Any, c_params: Any, err: Any) -> int:  # pragma: no cover
+    def _init(self, consts: Any, state: Any, c_params: Any, err: Any) -> int:  # pragma: no cover
         raise NotImplementedError
 
-    def _reset(self, c_block: Any) -> None:  # pragma: no cover
+    def _reset(self, consts: Any, state: Any) -> None:  # pragma: no cover
         raise NotImplementedError
 
 
@@ -158,14 +163,14 @@ class SimpleGear(Block):
     friction_model, ... (docs/physics.md section 9, python-api.md)."""
 
     kind = "simple_gear"
-    _ctype = "gs_simple_gear"
+    _consts_ctype = "gs_simple_gear_consts"
     _specs = {p.name: p for p in P.SIMPLE_GEAR_PARAMS}
 
-    def _init(self, c_block: Any, c_params: Any, err: Any) -> int:
-        return int(lib.gs_simple_gear_init(c_block, c_params, err))
+    def _init(self, consts: Any, state: Any, c_params: Any, err: Any) -> int:
+        return int(lib.gs_simple_gear_init(consts, state, c_params, err))
 
-    def _reset(self, c_block: Any) -> None:
-        lib.gs_simple_gear_reset(c_block)
+    def _reset(self, consts: Any, state: Any) -> None:
+        lib.gs_simple_gear_reset(consts, state)
 
     def step(
         self,
@@ -202,7 +207,7 @@ class SimpleGear(Block):
         c_in.heat_flow_W = heat_flow
         _temperature_in(c_in, temperature)
         out = ffi.new("gs_gear_ports_out *")
-        lib.gs_simple_gear_step(self._c, dt, c_in, out)
+        lib.gs_simple_gear_step(self._consts, self._state, dt, c_in, out)
         return {
             "base_torque": out.base_torque_Nm,
             "follower_torque": out.follower_torque_Nm,
@@ -222,14 +227,14 @@ class RackPinion(Block):
     section 9, the seed's program names)."""
 
     kind = "rack_pinion"
-    _ctype = "gs_rack_pinion"
+    _consts_ctype = "gs_rack_pinion_consts"
     _specs = {p.name: p for p in P.RACK_PINION_PARAMS}
 
-    def _init(self, c_block: Any, c_params: Any, err: Any) -> int:
-        return int(lib.gs_rack_pinion_init(c_block, c_params, err))
+    def _init(self, consts: Any, state: Any, c_params: Any, err: Any) -> int:
+        return int(lib.gs_rack_pinion_init(consts, state, c_params, err))
 
-    def _reset(self, c_block: Any) -> None:
-        lib.gs_rack_pinion_reset(c_block)
+    def _reset(self, consts: Any, state: Any) -> None:
+        lib.gs_rack_pinion_reset(consts, state)
 
     @property
     def radius(self) -> float:
@@ -269,7 +274,7 @@ class RackPinion(Block):
         c_in.heat_flow_W = heat_flow
         _temperature_in(c_in, temperature)
         out = ffi.new("gs_rack_ports_out *")
-        lib.gs_rack_pinion_step(self._c, dt, c_in, out)
+        lib.gs_rack_pinion_step(self._consts, self._state, dt, c_in, out)
         return {
             "pinion_torque": out.pinion_torque_Nm,
             "rack_force": out.rack_force_N,

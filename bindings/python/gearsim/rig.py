@@ -1,9 +1,13 @@
 """Rigs: a block between a driven base shaft and the driven side (follower
-inertia or rack mass), the C ``gs_rig`` of include/gearsim/rig.h
-(docs/physics.md section 11).
+inertia or rack mass), the C rig of include/gearsim/rig.h (docs/physics.md
+section 11): constants (gs_rig_consts, filled once by init) and a state
+(gs_rig_state, all a step changes).
 
 ``Rig.step`` is the per-step call (HIL); ``Rig.run`` loops in C over numpy
 arrays (gs_rig_run) and is bit-identical to the same number of steps.
+
+The names, units and docs of the inputs, outputs and state come from the C
+field tables (include/gearsim/fields.h, read by gearsim._lib at import).
 """
 
 from __future__ import annotations
@@ -18,67 +22,55 @@ from typing import Any, ClassVar
 import numpy as np
 
 from . import params as P
-from ._lib import INPUT_COLUMNS, OUTPUT_COLUMNS, check, ffi, lib
+from ._lib import INPUT_INFO, OUTPUT_INFO, REAL_SIZE, STATE_INFO, FieldInfo, check, ffi, lib
 from .blocks import Block, RackPinion, SimpleGear
 from .errors import GearsimError, InputError, ParameterError, SubstepWarning, caller_stacklevel
 
-__all__ = ["Rig", "GearRig", "RackRig", "RigResult", "RigSnapshot", "INPUT_NAMES", "OUTPUT_NAMES"]
+__all__ = [
+    "Rig",
+    "GearRig",
+    "RackRig",
+    "RigResult",
+    "RigSnapshot",
+    "INPUT_NAMES",
+    "OUTPUT_NAMES",
+    "STATE_NAMES",
+    "INPUT_FIELDS",
+    "OUTPUT_FIELDS",
+    "STATE_FIELDS",
+    "FieldInfo",
+]
 
-# Python name -> C field of gs_rig_input / gs_rig_output.
-_INPUT_FIELDS = {
-    "base_speed": "base_speed_rad_s",
-    "base_torque": "base_torque_Nm",
-    "load": "load",
-    "ambient_temperature": "ambient_temperature_K",
-    "measured_temperature": "measured_temperature_K",
-}
-_OUTPUT_FIELDS = {
-    "base_torque": "base_torque_Nm",
-    "base_speed": "base_speed_rad_s",
-    "base_angle": "base_angle_rad",
-    "follower_speed": "follower_speed",
-    "follower_position": "follower_position",
-    "base_port_torque": "base_port_torque_Nm",
-    "follower_port_torque": "follower_port_torque",
-    "mesh_loss_power": "mesh_loss_power_W",
-    "loss_power": "loss_power_W",
-    "port_power": "port_power_W",
-    "contact_energy": "contact_energy_J",
-    "temperature": "temperature_K",
-    "backlash_position": "backlash_position_m",
-    "contact_force": "contact_force_N",
-    "follower_acceleration": "follower_acceleration",
-}
-_IN_COL = {name: INPUT_COLUMNS[c] for name, c in _INPUT_FIELDS.items()}
-_OUT_COL = {name: OUTPUT_COLUMNS[c] for name, c in _OUTPUT_FIELDS.items()}
-if sorted(_IN_COL.values()) != list(range(lib.GS_RIG_INPUT_FIELDS)) or sorted(
-    _OUT_COL.values()
-) != list(range(lib.GS_RIG_OUTPUT_FIELDS)):  # pragma: no cover
-    raise ImportError("gearsim: gs_rig_input / gs_rig_output do not match the bindings")
+#: The rig's inputs (name, gear_unit, rack_unit, doc, ...) from gs_rig_input_info.
+INPUT_FIELDS: tuple[FieldInfo, ...] = INPUT_INFO
+#: The rig's outputs from gs_rig_output_info.
+OUTPUT_FIELDS: tuple[FieldInfo, ...] = OUTPUT_INFO
+#: The rig's state from gs_rig_state_info (the block's fields first).
+STATE_FIELDS: tuple[FieldInfo, ...] = STATE_INFO
 
-#: Columns of the N x 5 input array of Rig.run_array, in order.
-INPUT_NAMES: tuple[str, ...] = tuple(sorted(_IN_COL, key=_IN_COL.__getitem__))
-#: Columns of the N x 15 output array of Rig.run_array, in order.
-OUTPUT_NAMES: tuple[str, ...] = tuple(sorted(_OUT_COL, key=_OUT_COL.__getitem__))
+#: Columns of the N x 5 input array of Rig.run_array, in order (gs_rig_input).
+INPUT_NAMES: tuple[str, ...] = tuple(f.name for f in INPUT_INFO)
+#: Columns of the N x 15 output array of Rig.run_array, in order (gs_rig_output).
+OUTPUT_NAMES: tuple[str, ...] = tuple(f.name for f in OUTPUT_INFO)
+#: Keys of Rig.state, in gs_rig_state member order.
+STATE_NAMES: tuple[str, ...] = tuple(f.name for f in STATE_INFO)
+
+_IN_COL = {f.name: f.offset // REAL_SIZE for f in INPUT_INFO}
+_OUT_COL = {f.name: f.offset // REAL_SIZE for f in OUTPUT_INFO}
+
+# Rig.step's keywords, in the order gspy_rig_step (gearsim_build.py) takes them.
+_STEP_INPUTS = ("base_speed", "base_torque", "load", "ambient_temperature", "measured_temperature")
+if set(_STEP_INPUTS) != set(INPUT_NAMES):  # pragma: no cover - C and bindings disagree
+    raise ImportError(
+        f"gearsim: the rig's inputs {INPUT_NAMES} are not Rig.step's keywords {_STEP_INPUTS}"
+    )
 
 
-_OUTPUT_DOCS = {
-    "base_torque": "torque the drive applies to the base shaft (N*m)",
-    "base_speed": "base (pinion) shaft speed (rad/s)",
-    "base_angle": "base (pinion) shaft angle (rad)",
-    "follower_speed": "follower speed (rad/s) or rack velocity (m/s)",
-    "follower_position": "follower angle (rad) or rack position (m)",
-    "base_port_torque": "tau_B, what the base shaft applies to the block (N*m)",
-    "follower_port_torque": "tau_F (N*m) or F_R (N), what the driven side applies to the block",
-    "mesh_loss_power": "meshing loss (W, >= 0)",
-    "loss_power": "mesh + viscous + contact damping loss (W, >= 0)",
-    "port_power": "power into the block through both ports (W)",
-    "contact_energy": "energy in the backlash spring at the end of the step (J)",
-    "temperature": "block temperature at the end of the step, or the measured input (K)",
-    "backlash_position": "backlash position x (m)",
-    "contact_force": "backlash contact force (N)",
-    "follower_acceleration": "follower (rad/s^2) or rack (m/s^2) acceleration",
-}
+def _described(f: FieldInfo) -> str:
+    """A field's doc with its unit(s), for the RigResult properties."""
+    if f.gear_unit == f.rack_unit:
+        return f"{f.doc} ({f.gear_unit})"
+    return f"{f.doc} ({f.gear_unit} gear rig, {f.rack_unit} rack rig)"
 
 
 class RigResult(tuple):
@@ -159,24 +151,26 @@ def _field(index: int, doc: str) -> property:
     return property(get, doc=doc)
 
 
-for _i, _name in enumerate(OUTPUT_NAMES):
-    setattr(RigResult, _name, _field(_i, _OUTPUT_DOCS[_name]))
-del _i, _name
+for _i, _info in enumerate(OUTPUT_INFO):
+    setattr(RigResult, _info.name, _field(_i, _described(_info)))
+del _i, _info
 
 
 @dataclass(frozen=True)
 class RigSnapshot:
-    """The complete C state of a rig (the gs_rig struct bytes), for
-    Rig.restore. Picklable; only restorable into a rig with the same
-    parameters."""
+    """The state of a rig (the bytes of its C gs_rig_state, which holds
+    everything a step changes), for Rig.restore. Picklable. Restores into any
+    rig of the same block kind: with the same parameters it continues
+    bit-identically; with others it continues from this state under the new
+    parameters (a re-tuned rig)."""
 
     block: str
     state: bytes
-    key: Any
 
 
 class Rig:
-    """A block between a base shaft and the driven side (C gs_rig).
+    """A block between a base shaft and the driven side (the C rig: its
+    constants, filled once at construction, and its state).
 
     Args:
         block: a SimpleGear or a RackPinion.
@@ -216,19 +210,22 @@ class Rig:
         c_params.temperature_source = (
             lib.GS_TEMPERATURE_FROM_INPUT if temperature_input else lib.GS_TEMPERATURE_FROM_MODEL
         )
-        rig = ffi.new("gs_rig *")
+        consts = ffi.new("gs_rig_consts *")
+        state = ffi.new("gs_rig_state *")
         err = ffi.new("gs_error *")
         if kind == "simple_gear":
-            status = lib.gs_rig_init_gear(rig, block._c_params, c_params, err)
+            status = lib.gs_rig_init_gear(consts, state, block._c_params, c_params, err)
         else:
-            status = lib.gs_rig_init_rack(rig, block._c_params, c_params, err)
+            status = lib.gs_rig_init_rack(consts, state, block._c_params, c_params, err)
 
         def value_of(name: str) -> Any:  # called by check() only on failure
             return {**block.params, **full, "dt": dt_value}[name]
 
         check(status, err, rename=_c_rig_names(kind), value_of=value_of)
         info = ffi.new("gs_rig_info *")
-        lib.gs_rig_get_info(rig, info)
+        lib.gs_rig_get_info(consts, info)
+        self._substeps = int(info.contact_substeps)
+        self._follower_per_base = float(info.follower_per_base)
         self._h_omega_n = float(info.contact_h_omega_n)
         self._substeps_capped = bool(info.substeps_capped)
         if self._substeps_capped:
@@ -253,17 +250,13 @@ class Rig:
         self._temperature_input = bool(temperature_input)
         self._given = given
         self._full = full
-        self._rig = rig
-        self._stepper, self._step_out = _stepper(rig)
+        # The constants are read-only after init (shared by copies); the state
+        # is what a step changes (a snapshot is a copy of it).
+        self._consts = consts
+        self._state = state
+        self._stepper, self._step_out = _stepper(consts, state)
         self._ambient = float(full["ambient_temperature"])
         self._speed_driven = full["base_drive"] == "speed"
-        self._key = (
-            kind,
-            P.canonical(block.params),
-            P.canonical(full),
-            P.canonical(dt_value),
-            self._temperature_input,
-        )
         self.model: Any = None  # set by Model.rig()
 
     # -- description ---------------------------------------------------------
@@ -312,8 +305,29 @@ class Rig:
 
     @property
     def substeps(self) -> int:
-        """Contact sub-steps per step chosen by the C rig (backlash)."""
-        return int(self._rig.substeps)
+        """Contact sub-steps per step chosen by the C rig (1 without backlash)."""
+        return self._substeps
+
+    @property
+    def follower_per_base(self) -> float:
+        """Follower speed per base speed of the rigid mesh: s/g (rad/s per
+        rad/s, gear rig) or s_R*r_P (m/s per rad/s, rack rig)."""
+        return self._follower_per_base
+
+    @property
+    def input_units(self) -> dict[str, str]:
+        """Unit of each input in this rig (pint syntax), from the C field table."""
+        return {f.name: f.unit(self._kind) for f in INPUT_INFO}
+
+    @property
+    def output_units(self) -> dict[str, str]:
+        """Unit of each output (RigResult field) in this rig, from the C field table."""
+        return {f.name: f.unit(self._kind) for f in OUTPUT_INFO}
+
+    @property
+    def state_units(self) -> dict[str, str]:
+        """Unit of each Rig.state entry in this rig ("1" for the flags)."""
+        return {f.name: f.unit(self._kind) for f in STATE_INFO}
 
     @property
     def contact_h_omega_n(self) -> float:
@@ -336,29 +350,50 @@ class Rig:
         )
 
     # -- state -----------------------------------------------------------------
+    @property
+    def state(self) -> dict[str, float | int]:
+        """The rig's state by name (STATE_NAMES, from gs_rig_state_info; units
+        in state_units): temperature, backlash_position, contact_force,
+        follower_torque, contact_locked (the block's), base_speed, base_angle,
+        follower_speed, follower_position, base_speed_sample,
+        base_acceleration, started. Floats, and ints for the flags. A copy:
+        writing to it does not change the rig (use snapshot/restore)."""
+        buf = ffi.buffer(self._state)
+        return {name: unpack(buf, offset)[0] for name, unpack, offset in _STATE_READERS}
+
     def reset(self) -> None:
         """Back to the initial state (speeds, angles, temperature, backlash)."""
-        lib.gs_rig_reset(self._rig)
+        lib.gs_rig_reset(self._consts, self._state)
 
     def snapshot(self) -> RigSnapshot:
-        """The complete state; restore() continues bit-identically."""
-        return RigSnapshot(self._kind, bytes(ffi.buffer(self._rig)), self._key)
+        """The state (a copy of the C gs_rig_state); restore() continues
+        bit-identically."""
+        return RigSnapshot(self._kind, bytes(ffi.buffer(self._state)))
 
     def restore(self, snapshot: RigSnapshot) -> None:
-        """Restore a snapshot() taken from this rig or one with the same parameters."""
+        """Restore a snapshot() of this rig or of another rig of the same block
+        kind (with other parameters, the rig continues from that state under
+        its own parameters)."""
         if not isinstance(snapshot, RigSnapshot):
             raise TypeError(f"expected a RigSnapshot, got {type(snapshot).__name__}")
-        if snapshot.key != self._key or len(snapshot.state) != ffi.sizeof("gs_rig"):
-            raise GearsimError("snapshot was taken from a rig with other parameters")
-        ffi.memmove(self._rig, snapshot.state, len(snapshot.state))
+        if snapshot.block != self._kind:
+            raise GearsimError(
+                f"snapshot of a {snapshot.block} rig cannot restore a {self._kind} rig"
+            )
+        if len(snapshot.state) != ffi.sizeof("gs_rig_state"):
+            raise GearsimError(
+                f"snapshot of {len(snapshot.state)} bytes, expected "
+                f"{ffi.sizeof('gs_rig_state')} (another gearsim version?)"
+            )
+        ffi.memmove(self._state, snapshot.state, len(snapshot.state))
 
     def copy(self) -> Rig:
-        """An independent rig with the same parameters and state."""
+        """An independent rig with the same parameters and state (the constants,
+        read-only, are shared; the state is copied)."""
         new = self.__class__.__new__(self.__class__)
         new.__dict__.update(self.__dict__)
-        new._rig = ffi.new("gs_rig *")
-        ffi.memmove(new._rig, self._rig, ffi.sizeof("gs_rig"))
-        new._stepper, new._step_out = _stepper(new._rig)
+        new._state = ffi.new("gs_rig_state *", self._state[0])
+        new._stepper, new._step_out = _stepper(new._consts, new._state)
         return new
 
     # -- stepping --------------------------------------------------------------
@@ -524,7 +559,7 @@ class Rig:
         if n:
             c_in = ffi.cast("gs_rig_input *", ffi.from_buffer(arr))
             c_out = ffi.cast("gs_rig_output *", ffi.from_buffer(out, require_writable=True))
-            lib.gs_rig_run(self._rig, n, c_in, c_out)
+            lib.gs_rig_run(self._consts, self._state, n, c_in, c_out)
         return out
 
 
@@ -533,17 +568,24 @@ class Rig:
 # gspy_stepper; the result is read from the stepper's first bytes (out is its
 # first member) in one struct.unpack_from (all-double struct, fields in column
 # order = FIELDS order).
-_STEP_INPUTS = ("base_speed", "base_torque", "load", "ambient_temperature", "measured_temperature")
 _step_c = lib.gspy_rig_step
 _unpack_out = struct.Struct(f"@{lib.GS_RIG_OUTPUT_FIELDS}d").unpack_from
 _new_tuple = tuple.__new__
 
+# Rig.state: (name, unpack_from of its C type, offset) per gs_rig_state_info entry.
+_STATE_READERS = tuple(
+    (f.name, struct.Struct("@i" if f.is_integer else "@d").unpack_from, f.offset)
+    for f in STATE_INFO
+)
 
-def _stepper(rig: Any) -> tuple[Any, Any]:
-    """A gspy_stepper for the gs_rig * rig (which the caller keeps alive), and a
-    buffer over it whose first bytes are its gs_rig_output."""
+
+def _stepper(consts: Any, state: Any) -> tuple[Any, Any]:
+    """A gspy_stepper for a rig's gs_rig_consts * and gs_rig_state * (which the
+    caller keeps alive), and a buffer over it whose first bytes are its
+    gs_rig_output."""
     stepper = ffi.new("gspy_stepper *")
-    stepper.rig = rig
+    stepper.consts = consts
+    stepper.state = state
     return stepper, ffi.buffer(stepper)
 
 
