@@ -10,7 +10,10 @@
 #include "gearsim/types.h"
 
 /* ---- Internal constants: what init derives and the step only reads. The
- * state lives in the public gs_block_state. Plain data, no pointers. */
+ * state lives in the public gs_block_state. Plain data, no pointers. Options
+ * are stored as int, not as their enum types: the size of an enum depends on
+ * the ABI (arm-none-eabi packs them into one byte), and the published size of
+ * the opaque constants must hold on every target. */
 typedef struct {
     gs_real x[GS_TABLE_MAX];
     gs_real y[GS_TABLE_MAX];
@@ -35,8 +38,8 @@ typedef struct {
     gs_real direction;          /* s or s_R, +1 or -1 */
     gs_real mu_base;            /* viscous, N*m/(rad/s) */
     gs_real mu_follower;        /* viscous, N*m/(rad/s) or N/(m/s) */
-    gs_friction_model friction;
-    gs_loss_smoothing smoothing;
+    int friction;               /* gs_friction_model */
+    int smoothing;              /* gs_loss_smoothing */
     gs_real eta;                /* constant efficiency */
     gs_real power_threshold;    /* W */
     gs_real inv_power_threshold;
@@ -49,7 +52,7 @@ typedef struct {
     gs_real initial_temperature;/* K */
     /* backlash */
     int backlash;
-    gs_hard_stop_model hard_stop;
+    int hard_stop;              /* gs_hard_stop_model */
     gs_real half_gap;           /* b/2, m */
     gs_real inv_transition;     /* 1/d */
     gs_real stiffness;

@@ -117,8 +117,8 @@ gs_status gs_rack_pinion_mesh(gs_mesh_ *mesh, const gs_rack_pinion_params *p, gs
     m.direction = direction;
     m.mu_base = p->pinion_viscous_coefficient;
     m.mu_follower = p->rack_viscous_coefficient;
-    m.friction = p->friction_model;
-    m.smoothing = p->loss_smoothing;
+    m.friction = (int)p->friction_model;
+    m.smoothing = (int)p->loss_smoothing;
     m.eta = p->friction_model == GS_FRICTION_CONSTANT_EFFICIENCY ? p->efficiency_const : GS_R(1.0);
     m.power_threshold = p->power_threshold_W;
     m.inv_power_threshold = GS_R(1.0) / p->power_threshold_W;

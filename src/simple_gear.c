@@ -160,8 +160,8 @@ gs_status gs_simple_gear_mesh(gs_mesh_ *mesh, const gs_simple_gear_params *p, gs
     m.direction = direction;
     m.mu_base = p->viscous_coefficients[0];
     m.mu_follower = p->viscous_coefficients[1];
-    m.friction = p->friction_model;
-    m.smoothing = p->loss_smoothing;
+    m.friction = (int)p->friction_model;
+    m.smoothing = (int)p->loss_smoothing;
     m.eta = p->friction_model == GS_FRICTION_CONSTANT_EFFICIENCY ? p->efficiency_const : GS_R(1.0);
     m.power_threshold = p->power_threshold_W;
     m.inv_power_threshold = p->power_threshold_W > GS_R(0.0) ? GS_R(1.0) / p->power_threshold_W : GS_R(0.0);
