@@ -228,18 +228,19 @@ static inline void bench_make_inputs(gs_rig_input *in, double load_scale)
     for (int i = 0; i < BENCH_PERIOD; ++i) {
         const double w = 20.0 * bench_tone_next(&w1) + 4.0 * bench_tone_next(&w2);
         const double load = 2.0 + 6.0 * bench_tone_next(&l1) + 0.5 * bench_tone_next(&l2);
-        in[i].base_speed_rad_s = (gs_real)w;
-        in[i].base_torque_Nm = GS_R(0.0);
+        in[i].base_speed = (gs_real)w;
+        in[i].base_torque = GS_R(0.0);
         in[i].load = (gs_real)(load_scale * load);
-        in[i].ambient_temperature_K = GS_R(293.15);
-        in[i].measured_temperature_K = GS_R(300.0);
+        in[i].ambient_temperature = GS_R(293.15);
+        in[i].measured_temperature = GS_R(300.0);
     }
 }
 
-/* Initialises rig and fills the input period `in` for configuration c.
- * Returns the init status; err receives the failing parameter. */
-static inline gs_status bench_setup(const bench_config *c, gs_rig *rig, gs_rig_input *in,
-                                    gs_error *err)
+/* Initialises the rig (its constants and state) and fills the input period
+ * `in` for configuration c. Returns the init status; err receives the failing
+ * parameter. */
+static inline gs_status bench_setup(const bench_config *c, gs_rig_consts *consts, gs_rig_state *state,
+                                    gs_rig_input *in, gs_error *err)
 {
     gs_rig_params rp = gs_rig_params_default();
     rp.dt_s = (gs_real)BENCH_DT_S;
@@ -248,12 +249,12 @@ static inline gs_status bench_setup(const bench_config *c, gs_rig *rig, gs_rig_i
     if (c->block == GS_RIG_SIMPLE_GEAR) {
         gs_simple_gear_params g = gs_simple_gear_params_default();
         c->setup_gear(&g, &rp);
-        s = gs_rig_init_gear(rig, &g, &rp, err);
+        s = gs_rig_init_gear(consts, state, &g, &rp, err);
     } else {
         gs_rack_pinion_params p = gs_rack_pinion_params_default();
         c->setup_rack(&p, &rp);
         load_scale = 1.0 / (double)gs_rack_pinion_radius(&p);
-        s = gs_rig_init_rack(rig, &p, &rp, err);
+        s = gs_rig_init_rack(consts, state, &p, &rp, err);
     }
     if (s == GS_OK) {
         bench_make_inputs(in, load_scale);

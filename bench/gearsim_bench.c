@@ -69,11 +69,18 @@ static gs_rig_input *table_of(const bench_config *c)
     return g_tables[c - CONFIGS];
 }
 
+/* A rig of the benchmark: the constants init derives (read-only afterwards)
+ * and the state a step updates. */
+typedef struct {
+    gs_rig_consts consts;
+    gs_rig_state state;
+} bench_rig;
+
 /* Initialises the rig and the input table of one configuration. */
-static int setup(const bench_config *c, gs_rig *rig)
+static int setup(const bench_config *c, bench_rig *rig)
 {
     gs_error err;
-    const gs_status s = bench_setup(c, rig, table_of(c), &err);
+    const gs_status s = bench_setup(c, &rig->consts, &rig->state, table_of(c), &err);
     if (s != GS_OK) {
         fprintf(stderr, "gearsim_bench: %s: init failed: %s (%s)\n", c->name, gs_status_str(s),
                 err.parameter);
@@ -84,7 +91,7 @@ static int setup(const bench_config *c, gs_rig *rig)
 
 /* Looks up and sets up the configuration called name (the --count and --dump
  * modes): 0, or the exit status (2 unknown name, 1 init failed). */
-static int setup_named(const char *name, gs_rig *rig, const bench_config **c)
+static int setup_named(const char *name, bench_rig *rig, const bench_config **c)
 {
     *c = find_config(name);
     if (*c == NULL) {
@@ -96,14 +103,14 @@ static int setup_named(const char *name, gs_rig *rig, const bench_config **c)
 /* Checksum of everything a step returns that depends on the state. */
 static double sink;
 
-static double steps_one_by_one(gs_rig *rig, const gs_rig_input *inputs, long steps)
+static double steps_one_by_one(bench_rig *rig, const gs_rig_input *inputs, long steps)
 {
     gs_rig_output out;
     double acc = 0.0;
     int k = 0;
     for (long i = 0; i < steps; ++i) {
-        gs_rig_step(rig, &inputs[k], &out);
-        acc += (double)out.base_torque_Nm;
+        gs_rig_step(&rig->consts, &rig->state, &inputs[k], &out);
+        acc += (double)out.base_torque;
         if (++k == PERIOD_SAMPLES) {
             k = 0;
         }
@@ -111,15 +118,15 @@ static double steps_one_by_one(gs_rig *rig, const gs_rig_input *inputs, long ste
     return acc;
 }
 
-static double steps_batched(gs_rig *rig, const gs_rig_input *inputs, long steps)
+static double steps_batched(bench_rig *rig, const gs_rig_input *inputs, long steps)
 {
     double acc = 0.0;
     long done = 0;
     while (done < steps) {
         const long left = steps - done;
         const size_t n = (size_t)(left < PERIOD_SAMPLES ? left : PERIOD_SAMPLES);
-        gs_rig_run(rig, n, inputs, g_outputs);
-        acc += (double)g_outputs[n - 1].base_torque_Nm;
+        gs_rig_run(&rig->consts, &rig->state, n, inputs, g_outputs);
+        acc += (double)g_outputs[n - 1].base_torque;
         done += (long)n;
     }
     return acc;
@@ -158,10 +165,10 @@ typedef struct {
  * Wall-clock time is what a real-time loop sees; the thread's CPU time leaves
  * out most of the time the thread waited for a core while other processes
  * ran (not hypervisor steal time), so the two together show machine noise. */
-static void time_run(gs_rig *rig, const gs_rig_input *inputs, int batched, long steps,
+static void time_run(bench_rig *rig, const gs_rig_input *inputs, int batched, long steps,
                      double *wall_ns, double *cpu_ns)
 {
-    gs_rig_reset(rig);
+    gs_rig_reset(&rig->consts, &rig->state);
     const double c0 = clock_ns(CLOCK_THREAD_CPUTIME_ID);
     const double t0 = clock_ns(CLOCK_MONOTONIC);
     sink += batched ? steps_batched(rig, inputs, steps) : steps_one_by_one(rig, inputs, steps);
@@ -188,7 +195,7 @@ static stats summarise(double *ns, double *cpu, int runs)
 static int count_mode(const char *name, const char *mode, long steps)
 {
     const bench_config *c;
-    gs_rig rig;
+    bench_rig rig;
     const int status = setup_named(name, &rig, &c);
     if (status != 0) {
         return status;
@@ -207,7 +214,7 @@ static int count_mode(const char *name, const char *mode, long steps)
 static int dump_mode(const char *name, long steps, const char *path)
 {
     const bench_config *c;
-    gs_rig rig;
+    bench_rig rig;
     const int status = setup_named(name, &rig, &c);
     if (status != 0) {
         return status;
@@ -220,7 +227,7 @@ static int dump_mode(const char *name, long steps, const char *path)
     gs_rig_output out;
     int k = 0;
     for (long i = 0; i < steps; ++i) {
-        gs_rig_step(&rig, &table_of(c)[k], &out);
+        gs_rig_step(&rig.consts, &rig.state, &table_of(c)[k], &out);
         if (fwrite(&out, sizeof out, 1, f) != 1) {
             perror(path);
             fclose(f);
@@ -304,7 +311,7 @@ int main(int argc, char **argv)
     /* Round robin: run r of every configuration and mode comes before run r+1 of
      * any, so a burst of load on the machine spreads over all of them instead
      * of spoiling one configuration's runs. */
-    static gs_rig rigs[MAX_SELECTED];
+    static bench_rig rigs[MAX_SELECTED];
     static double wall[MAX_SELECTED][2][MAX_RUNS];
     static double cpu[MAX_SELECTED][2][MAX_RUNS];
     for (size_t k = 0; k < n_selected; ++k) {
@@ -327,6 +334,8 @@ int main(int argc, char **argv)
     int first = 1;
     for (size_t k = 0; k < n_selected; ++k) {
         const bench_config *c = selected[k];
+        gs_rig_info info;
+        gs_rig_get_info(&rigs[k].consts, &info);
         for (int batched = 0; batched < 2; ++batched) {
             const stats s = summarise(wall[k][batched], cpu[k][batched], runs);
             const char *mode = batched ? "run" : "step";
@@ -337,7 +346,7 @@ int main(int argc, char **argv)
                         "%s    {\"config\": \"%s\", \"description\": \"%s\", \"mode\": \"%s\", "
                         "\"substeps\": %d, \"median_ns\": %.3f, \"min_ns\": %.3f, \"max_ns\": %.3f, "
                         "\"q1_ns\": %.3f, \"q3_ns\": %.3f, \"steps_per_s\": %.1f, \"cpu_median_ns\": %.3f}",
-                        first ? "" : ",\n", c->name, c->description, mode, rigs[k].substeps, s.median,
+                        first ? "" : ",\n", c->name, c->description, mode, info.contact_substeps, s.median,
                         s.min, s.max, s.q1, s.q3, 1e9 / s.median, s.cpu_median);
                 first = 0;
             }

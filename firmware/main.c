@@ -4,8 +4,8 @@
  * The same file builds the Cortex-M4F program (FW_TARGET defined; run under
  * QEMU mps2-an386, output through semihosting) and the host program (host
  * float build); scripts/firmware_check.sh compares the two outputs. Lines
- * starting with '#' are informational (instruction counts on the target) and
- * are not compared. */
+ * starting with '#' are informational (struct sizes, the column names, the
+ * instruction counts on the target) and are not compared. */
 #include <inttypes.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -46,37 +46,40 @@ static uint64_t hash_real(uint64_t h, gs_real x)
     return h;
 }
 
+/* The outputs of a step in the order of gearsim/fields.h (GS_RIG_OUTPUT_LIST),
+ * which is the column order of the step lines. */
 static void output_fields(const gs_rig_output *o, gs_real v[GS_RIG_OUTPUT_FIELDS])
 {
-    v[0] = o->base_torque_Nm;
-    v[1] = o->base_speed_rad_s;
-    v[2] = o->base_angle_rad;
-    v[3] = o->follower_speed;
-    v[4] = o->follower_position;
-    v[5] = o->base_port_torque_Nm;
-    v[6] = o->follower_port_torque;
-    v[7] = o->mesh_loss_power_W;
-    v[8] = o->loss_power_W;
-    v[9] = o->port_power_W;
-    v[10] = o->contact_energy_J;
-    v[11] = o->temperature_K;
-    v[12] = o->backlash_position_m;
-    v[13] = o->contact_force_N;
-    v[14] = o->follower_acceleration;
+    int i = 0;
+#define FW_OUTPUT_VALUE_(type, name, gear_unit, rack_unit, doc) v[i++] = o->name;
+    GS_RIG_OUTPUT_LIST(FW_OUTPUT_VALUE_)
+#undef FW_OUTPUT_VALUE_
+}
+
+/* The column names of the step lines, from the same list. */
+static void print_columns(void)
+{
+    printf("# columns step");
+#define FW_OUTPUT_NAME_(type, name, gear_unit, rack_unit, doc) printf(" %s", #name);
+    GS_RIG_OUTPUT_LIST(FW_OUTPUT_NAME_)
+#undef FW_OUTPUT_NAME_
+    printf("\n");
 }
 
 #ifdef FW_TARGET
 /* Instructions per step: the scenario stepped once without printing, minus a
  * pass that only builds the inputs. */
-static void report_cost(const fw_scenario *s, gs_rig *rig)
+static void report_cost(const fw_scenario *s, const gs_rig_consts *consts, gs_rig_state *state)
 {
     gs_rig_input in;
     gs_rig_output out;
-    gs_rig_reset(rig);
+    gs_rig_info info;
+    gs_rig_get_info(consts, &info);
+    gs_rig_reset(consts, state);
     const uint64_t t0 = fw_instructions();
     for (int k = 0; k < s->steps; ++k) {
         s->input(k, &in);
-        gs_rig_step(rig, &in, &out);
+        gs_rig_step(consts, state, &in, &out);
     }
     const uint64_t t1 = fw_instructions();
     for (int k = 0; k < s->steps; ++k) {
@@ -86,22 +89,24 @@ static void report_cost(const fw_scenario *s, gs_rig *rig)
     const uint64_t t2 = fw_instructions();
     const uint64_t step_total = (t1 - t0) - (t2 - t1);
     printf("# cost %s %" PRIu32 " instructions/step (QEMU -icount, %d steps, %d contact sub-steps)\n",
-           s->name, (uint32_t)(step_total / (uint64_t)s->steps), s->steps, rig->mesh.backlash ? rig->substeps : 0);
-    gs_rig_reset(rig);
+           s->name, (uint32_t)(step_total / (uint64_t)s->steps), s->steps,
+           info.contact_h_omega_n > GS_R(0.0) ? info.contact_substeps : 0); /* h*omega_n > 0: backlash */
+    gs_rig_reset(consts, state);
 }
 #endif
 
 static int run(const fw_scenario *s)
 {
-    gs_rig rig;
+    gs_rig_consts consts; /* filled by init, read-only afterwards */
+    gs_rig_state state;   /* what a step updates */
     gs_error err;
-    const gs_status st = s->init(&rig, &err);
+    const gs_status st = s->init(&consts, &state, &err);
     if (st != GS_OK) {
         printf("scenario %s init failed: %s: %s\n", s->name, err.parameter, err.message);
         return 1;
     }
 #ifdef FW_TARGET
-    report_cost(s, &rig);
+    report_cost(s, &consts, &state);
 #endif
     printf("scenario %s steps %d\n", s->name, s->steps);
     uint64_t h = UINT64_C(0xcbf29ce484222325);
@@ -110,7 +115,7 @@ static int run(const fw_scenario *s)
         gs_rig_output out;
         gs_real v[GS_RIG_OUTPUT_FIELDS];
         s->input(k, &in);
-        gs_rig_step(&rig, &in, &out);
+        gs_rig_step(&consts, &state, &in, &out);
         output_fields(&out, v);
         printf("%04d", k);
         for (int i = 0; i < GS_RIG_OUTPUT_FIELDS; ++i) {
@@ -131,14 +136,20 @@ int main(void)
     printf("# calibration %" PRIu32 " instructions counted for 200000 known\n",
            (uint32_t)fw_calibrate(100000U));
 #endif
-    /* Layout: informational only. arm-none-eabi uses the AAPCS bare-metal
-     * variable-size enums (1 byte here), x86-64 int-sized ones, so the structs
-     * holding enums are a few bytes smaller on the target. */
-    printf("# layout sizeof gs_rig %u gs_simple_gear %u gs_rack_pinion %u gs_rig_params %u "
-           "gs_simple_gear_params %u gs_rack_pinion_params %u precision %s\n",
-           (unsigned)sizeof(gs_rig), (unsigned)sizeof(gs_simple_gear), (unsigned)sizeof(gs_rack_pinion),
-           (unsigned)sizeof(gs_rig_params), (unsigned)sizeof(gs_simple_gear_params),
-           (unsigned)sizeof(gs_rack_pinion_params), PRECISION);
+    /* Layout: informational only. RAM per rig instance is gs_rig_state; the
+     * constants (gs_rig_consts) are read-only after init and may live in
+     * flash. arm-none-eabi uses the AAPCS bare-metal variable-size enums
+     * (1 byte here), x86-64 int-sized ones, so the structs holding enums are
+     * a few bytes smaller on the target. */
+    printf("# layout sizeof gs_rig_consts %u gs_rig_state %u gs_simple_gear_consts %u "
+           "gs_rack_pinion_consts %u gs_block_state %u gs_rig_params %u gs_simple_gear_params %u "
+           "gs_rack_pinion_params %u gs_rig_input %u gs_rig_output %u precision %s\n",
+           (unsigned)sizeof(gs_rig_consts), (unsigned)sizeof(gs_rig_state),
+           (unsigned)sizeof(gs_simple_gear_consts), (unsigned)sizeof(gs_rack_pinion_consts),
+           (unsigned)sizeof(gs_block_state), (unsigned)sizeof(gs_rig_params),
+           (unsigned)sizeof(gs_simple_gear_params), (unsigned)sizeof(gs_rack_pinion_params),
+           (unsigned)sizeof(gs_rig_input), (unsigned)sizeof(gs_rig_output), PRECISION);
+    print_columns();
     int failures = 0;
     for (int i = 0; i < fw_scenario_count; ++i) {
         failures += run(&fw_scenarios[i]);

@@ -37,15 +37,15 @@ static gs_real wave(gs_real t, gs_real period)
 
 static void clear_input(gs_rig_input *in)
 {
-    in->base_speed_rad_s = GS_R(0.0);
-    in->base_torque_Nm = GS_R(0.0);
+    in->base_speed = GS_R(0.0);
+    in->base_torque = GS_R(0.0);
     in->load = GS_R(0.0);
-    in->ambient_temperature_K = GS_R(293.15);
-    in->measured_temperature_K = GS_R(300.0);
+    in->ambient_temperature = GS_R(293.15);
+    in->measured_temperature = GS_R(300.0);
 }
 
 /* ---- 1. Simple Gear, constant efficiency, speed-driven: ramp, hold, reverse. */
-static gs_status init_gear_const_speed(gs_rig *rig, gs_error *err)
+static gs_status init_gear_const_speed(gs_rig_consts *consts, gs_rig_state *state, gs_error *err)
 {
     gs_simple_gear_params g = gs_simple_gear_params_default();
     g.teeth_ratio = GS_R(3.0);
@@ -61,7 +61,7 @@ static gs_status init_gear_const_speed(gs_rig *rig, gs_error *err)
     r.load_offset = GS_R(0.2);
     r.heat_path = 1;
     r.accel_filter_time_constant_s = GS_R(5e-3);
-    return gs_rig_init_gear(rig, &g, &r, err);
+    return gs_rig_init_gear(consts, state, &g, &r, err);
 }
 
 static void input_gear_const_speed(int k, gs_rig_input *in)
@@ -69,19 +69,19 @@ static void input_gear_const_speed(int k, gs_rig_input *in)
     const gs_real t = time_of(k);
     clear_input(in);
     if (t < GS_R(0.3)) {
-        in->base_speed_rad_s = GS_R(100.0) * t / GS_R(0.3);
+        in->base_speed = GS_R(100.0) * t / GS_R(0.3);
     } else if (t < GS_R(0.6)) {
-        in->base_speed_rad_s = GS_R(100.0);
+        in->base_speed = GS_R(100.0);
     } else if (t < GS_R(0.9)) {
-        in->base_speed_rad_s = GS_R(100.0) - GS_R(500.0) * (t - GS_R(0.6));
+        in->base_speed = GS_R(100.0) - GS_R(500.0) * (t - GS_R(0.6));
     } else {
-        in->base_speed_rad_s = GS_R(-50.0);
+        in->base_speed = GS_R(-50.0);
     }
     in->load = GS_R(-6.0) + GS_R(2.0) * tri(t, GS_R(0.125));
 }
 
 /* ---- 2. Simple Gear, constant efficiency (Simscape smoothing), torque-driven. */
-static gs_status init_gear_const_torque(gs_rig *rig, gs_error *err)
+static gs_status init_gear_const_torque(gs_rig_consts *consts, gs_rig_state *state, gs_error *err)
 {
     gs_simple_gear_params g = gs_simple_gear_params_default();
     g.teeth_ratio = GS_R(0.5);
@@ -95,19 +95,19 @@ static gs_status init_gear_const_torque(gs_rig *rig, gs_error *err)
     r.base_inertia_kg_m2 = GS_R(2e-3);
     r.initial_base_speed_rad_s = GS_R(5.0);
     r.driven_inertia = GS_R(0.02);
-    return gs_rig_init_gear(rig, &g, &r, err);
+    return gs_rig_init_gear(consts, state, &g, &r, err);
 }
 
 static void input_gear_const_torque(int k, gs_rig_input *in)
 {
     const gs_real t = time_of(k);
     clear_input(in);
-    in->base_torque_Nm = GS_R(0.3) + GS_R(2.0) * wave(t, GS_R(0.25));
+    in->base_torque = GS_R(0.3) + GS_R(2.0) * wave(t, GS_R(0.25));
     in->load = GS_R(-1.0);
 }
 
 /* ---- 3. Simple Gear, backlash (smooth hard stop), speed-driven oscillation. */
-static gs_status init_gear_backlash_speed(gs_rig *rig, gs_error *err)
+static gs_status init_gear_backlash_speed(gs_rig_consts *consts, gs_rig_state *state, gs_error *err)
 {
     gs_simple_gear_params g = gs_simple_gear_params_default();
     g.teeth_ratio = GS_R(2.0);
@@ -122,19 +122,19 @@ static gs_status init_gear_backlash_speed(gs_rig *rig, gs_error *err)
     g.backlash.damping_N_s_m = GS_R(50.0);
     gs_rig_params r = gs_rig_params_default();
     r.driven_inertia = GS_R(1e-3);
-    return gs_rig_init_gear(rig, &g, &r, err);
+    return gs_rig_init_gear(consts, state, &g, &r, err);
 }
 
 static void input_gear_backlash_speed(int k, gs_rig_input *in)
 {
     const gs_real t = time_of(k);
     clear_input(in);
-    in->base_speed_rad_s = GS_R(20.0) * wave(t, GS_R(0.2));
+    in->base_speed = GS_R(20.0) * wave(t, GS_R(0.2));
     in->load = GS_R(0.5) * tri(t, GS_R(0.35));
 }
 
 /* ---- 4. Simple Gear, backlash (full damped, static lock), torque-driven. */
-static gs_status init_gear_backlash_torque(gs_rig *rig, gs_error *err)
+static gs_status init_gear_backlash_torque(gs_rig_consts *consts, gs_rig_state *state, gs_error *err)
 {
     gs_simple_gear_params g = gs_simple_gear_params_default();
     g.teeth_ratio = GS_R(1.5);
@@ -155,14 +155,14 @@ static gs_status init_gear_backlash_torque(gs_rig *rig, gs_error *err)
     r.driven_inertia = GS_R(2e-3);
     r.load_coulomb_friction = GS_R(0.05);
     r.contact_substeps = 8;
-    return gs_rig_init_gear(rig, &g, &r, err);
+    return gs_rig_init_gear(consts, state, &g, &r, err);
 }
 
 static void input_gear_backlash_torque(int k, gs_rig_input *in)
 {
     const gs_real t = time_of(k);
     clear_input(in);
-    in->base_torque_Nm = phase_of(t, GS_R(0.3)) < GS_R(0.5) ? GS_R(0.5) : GS_R(-0.5);
+    in->base_torque = phase_of(t, GS_R(0.3)) < GS_R(0.5) ? GS_R(0.5) : GS_R(-0.5);
     in->load = GS_R(-0.1);
 }
 
@@ -192,7 +192,7 @@ static void table2d(gs_simple_gear_params *g)
 }
 
 /* ---- 5. Simple Gear, 2-D table, speed-driven, model temperature with a heat path. */
-static gs_status init_gear_table2d_speed(gs_rig *rig, gs_error *err)
+static gs_status init_gear_table2d_speed(gs_rig_consts *consts, gs_rig_state *state, gs_error *err)
 {
     gs_simple_gear_params g = gs_simple_gear_params_default();
     g.teeth_ratio = GS_R(4.0);
@@ -204,20 +204,20 @@ static gs_status init_gear_table2d_speed(gs_rig *rig, gs_error *err)
     r.heat_path = 1;
     r.thermal_resistance_K_W = GS_R(0.5);
     r.accel_filter_time_constant_s = GS_R(2e-3);
-    return gs_rig_init_gear(rig, &g, &r, err);
+    return gs_rig_init_gear(consts, state, &g, &r, err);
 }
 
 static void input_gear_table2d_speed(int k, gs_rig_input *in)
 {
     const gs_real t = time_of(k);
     clear_input(in);
-    in->base_speed_rad_s = GS_R(60.0) * tri(t, GS_R(0.4));
+    in->base_speed = GS_R(60.0) * tri(t, GS_R(0.4));
     in->load = GS_R(-40.0) + GS_R(40.0) * wave(t, GS_R(0.15));
-    in->ambient_temperature_K = GS_R(340.0);
+    in->ambient_temperature = GS_R(340.0);
 }
 
 /* ---- 6. Simple Gear, 2-D table, torque-driven, measured temperature input. */
-static gs_status init_gear_table2d_torque(gs_rig *rig, gs_error *err)
+static gs_status init_gear_table2d_torque(gs_rig_consts *consts, gs_rig_state *state, gs_error *err)
 {
     gs_simple_gear_params g = gs_simple_gear_params_default();
     g.teeth_ratio = GS_R(2.5);
@@ -228,20 +228,20 @@ static gs_status init_gear_table2d_torque(gs_rig *rig, gs_error *err)
     r.base_inertia_kg_m2 = GS_R(5e-3);
     r.driven_inertia = GS_R(0.08);
     r.temperature_source = GS_TEMPERATURE_FROM_INPUT;
-    return gs_rig_init_gear(rig, &g, &r, err);
+    return gs_rig_init_gear(consts, state, &g, &r, err);
 }
 
 static void input_gear_table2d_torque(int k, gs_rig_input *in)
 {
     const gs_real t = time_of(k);
     clear_input(in);
-    in->base_torque_Nm = GS_R(4.0) * wave(t, GS_R(0.5)) + GS_R(0.5);
+    in->base_torque = GS_R(4.0) * wave(t, GS_R(0.5)) + GS_R(0.5);
     in->load = GS_R(-2.0) * tri(t, GS_R(0.3));
-    in->measured_temperature_K = GS_R(265.0) + GS_R(70.0) * t;
+    in->measured_temperature = GS_R(265.0) + GS_R(70.0) * t;
 }
 
 /* ---- 7. Simple Gear, load-dependent efficiency, torque-driven. */
-static gs_status init_gear_load_torque(gs_rig *rig, gs_error *err)
+static gs_status init_gear_load_torque(gs_rig_consts *consts, gs_rig_state *state, gs_error *err)
 {
     gs_simple_gear_params g = gs_simple_gear_params_default();
     g.teeth_ratio = GS_R(5.0);
@@ -254,14 +254,14 @@ static gs_status init_gear_load_torque(gs_rig *rig, gs_error *err)
     r.base_inertia_kg_m2 = GS_R(1e-3);
     r.driven_inertia = GS_R(0.2);
     r.load_offset = GS_R(-0.5);
-    return gs_rig_init_gear(rig, &g, &r, err);
+    return gs_rig_init_gear(consts, state, &g, &r, err);
 }
 
 static void input_gear_load_torque(int k, gs_rig_input *in)
 {
     const gs_real t = time_of(k);
     clear_input(in);
-    in->base_torque_Nm = GS_R(0.4) * tri(t, GS_R(0.6)) + GS_R(0.1);
+    in->base_torque = GS_R(0.4) * tri(t, GS_R(0.6)) + GS_R(0.1);
 }
 
 /* The rack's temperature table. */
@@ -280,7 +280,7 @@ static void rack_table(gs_rack_pinion_params *p)
 }
 
 /* ---- 8. Rack & Pinion, temperature table, speed-driven, heat path. */
-static gs_status init_rack_temp_speed(gs_rig *rig, gs_error *err)
+static gs_status init_rack_temp_speed(gs_rig_consts *consts, gs_rig_state *state, gs_error *err)
 {
     gs_rack_pinion_params p = gs_rack_pinion_params_default();
     p.parameterization = GS_PARAMETERIZE_TOOTH_PARAMETERS;
@@ -293,19 +293,19 @@ static gs_status init_rack_temp_speed(gs_rig *rig, gs_error *err)
     r.heat_path = 1;
     r.thermal_resistance_K_W = GS_R(1.0);
     r.accel_filter_time_constant_s = GS_R(1e-2);
-    return gs_rig_init_rack(rig, &p, &r, err);
+    return gs_rig_init_rack(consts, state, &p, &r, err);
 }
 
 static void input_rack_temp_speed(int k, gs_rig_input *in)
 {
     const gs_real t = time_of(k);
     clear_input(in);
-    in->base_speed_rad_s = t < GS_R(0.5) ? GS_R(40.0) * t : GS_R(20.0) - GS_R(80.0) * (t - GS_R(0.5));
+    in->base_speed = t < GS_R(0.5) ? GS_R(40.0) * t : GS_R(20.0) - GS_R(80.0) * (t - GS_R(0.5));
     in->load = GS_R(-50.0) + GS_R(30.0) * tri(t, GS_R(0.2));
 }
 
 /* ---- 9. Rack & Pinion, temperature table, torque-driven, negative direction. */
-static gs_status init_rack_temp_torque(gs_rig *rig, gs_error *err)
+static gs_status init_rack_temp_torque(gs_rig_consts *consts, gs_rig_state *state, gs_error *err)
 {
     gs_rack_pinion_params p = gs_rack_pinion_params_default();
     p.pinion_radius_m = GS_R(0.02);
@@ -319,19 +319,19 @@ static gs_status init_rack_temp_torque(gs_rig *rig, gs_error *err)
     r.base_inertia_kg_m2 = GS_R(1e-4);
     r.driven_inertia = GS_R(2.0);
     r.load_offset = GS_R(5.0);
-    return gs_rig_init_rack(rig, &p, &r, err);
+    return gs_rig_init_rack(consts, state, &p, &r, err);
 }
 
 static void input_rack_temp_torque(int k, gs_rig_input *in)
 {
     const gs_real t = time_of(k);
     clear_input(in);
-    in->base_torque_Nm = GS_R(1.5) * wave(t, GS_R(0.4)) - GS_R(0.2);
+    in->base_torque = GS_R(1.5) * wave(t, GS_R(0.4)) - GS_R(0.2);
     in->load = GS_R(-30.0) * tri(t, GS_R(0.25));
 }
 
 /* ---- 10. Rack & Pinion, backlash (full undamped), torque-driven, constant efficiency. */
-static gs_status init_rack_backlash_torque(gs_rig *rig, gs_error *err)
+static gs_status init_rack_backlash_torque(gs_rig_consts *consts, gs_rig_state *state, gs_error *err)
 {
     gs_rack_pinion_params p = gs_rack_pinion_params_default();
     p.pinion_radius_m = GS_R(0.015);
@@ -349,14 +349,14 @@ static gs_status init_rack_backlash_torque(gs_rig *rig, gs_error *err)
     r.driven_inertia = GS_R(1.0);
     r.load_coulomb_friction = GS_R(3.0);
     r.load_coulomb_speed_threshold = GS_R(1e-2);
-    return gs_rig_init_rack(rig, &p, &r, err);
+    return gs_rig_init_rack(consts, state, &p, &r, err);
 }
 
 static void input_rack_backlash_torque(int k, gs_rig_input *in)
 {
     const gs_real t = time_of(k);
     clear_input(in);
-    in->base_torque_Nm = GS_R(0.3) * wave(t, GS_R(0.1));
+    in->base_torque = GS_R(0.3) * wave(t, GS_R(0.1));
     in->load = GS_R(-4.0) * tri(t, GS_R(0.45));
 }
 

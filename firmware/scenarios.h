@@ -12,8 +12,9 @@
 
 typedef struct {
     const char *name;
-    /* Fills rig from the scenario's parameters; returns GS_OK or the status. */
-    gs_status (*init)(gs_rig *rig, gs_error *err);
+    /* Fills the rig's constants and initial state from the scenario's
+     * parameters; returns GS_OK or the status. */
+    gs_status (*init)(gs_rig_consts *consts, gs_rig_state *state, gs_error *err);
     /* Input of step k (0-based). */
     void (*input)(int k, gs_rig_input *in);
     int steps;

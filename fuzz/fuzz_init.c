@@ -6,12 +6,15 @@
  *   head bits 0-1: 0 gs_simple_gear_init, 1 gs_rack_pinion_init,
  *                  2 gs_rig_init_gear, 3 gs_rig_init_rack
  *   head bit 2:    pass err = NULL
- *   head bits 3-4: 3 = pass a NULL pointer argument (model, block params or rig params)
+ *   head bits 3-4: 3 = pass a NULL pointer argument (head bits 5-7 mod 3: the
+ *                  model, the block params or the rig params; for the model,
+ *                  the byte after the records picks its constants (even) or
+ *                  its state (odd))
  * Properties:
  *   - no crash, no sanitizer report, whatever the bytes;
  *   - a failed init returns a negative status of the enum, fills err with that
  *     status, the parameter's name and gs_status_str(status), and leaves the
- *     model untouched;
+ *     model (its constants and its state) untouched;
  *   - a successful init clears err, and then 64 steps with finite bounded
  *     inputs (|speed| <= 1e3 rad/s, |torque|, |force|, |load| <= 1e3, heat
  *     flow <= 1e3 W, temperatures in [1, 1e3] K, dt in [1e-6, 0.1] s for the
@@ -125,7 +128,7 @@ static gs_real in_range(fz_reader *r, double lo, double hi)
 
 #define CHECK_FINITE(v, what) FZ_CHECK(fz_finite(v), "%s = %g at step %d", what, (double)(v), k)
 
-static void step_gear(gs_simple_gear *gear, fz_reader *r)
+static void step_gear(const gs_simple_gear_consts *consts, gs_block_state *state, fz_reader *r)
 {
     const gs_real dt = (gs_real)fz_log_range(r, 1e-6, 0.1);
     for (int k = 0; k < STEPS; ++k) {
@@ -137,7 +140,7 @@ static void step_gear(gs_simple_gear *gear, fz_reader *r)
         in.temperature_K = in_range(r, 1.0, 1e3);
         in.use_temperature_input = fz_u8(r) & 1;
         gs_gear_ports_out o;
-        gs_simple_gear_step(gear, dt, &in, &o);
+        gs_simple_gear_step(consts, state, dt, &in, &o);
         CHECK_FINITE(o.base_torque_Nm, "base_torque_Nm");
         CHECK_FINITE(o.follower_torque_Nm, "follower_torque_Nm");
         CHECK_FINITE(o.follower_speed_rad_s, "follower_speed_rad_s");
@@ -150,7 +153,7 @@ static void step_gear(gs_simple_gear *gear, fz_reader *r)
     }
 }
 
-static void step_rack(gs_rack_pinion *rp, fz_reader *r)
+static void step_rack(const gs_rack_pinion_consts *consts, gs_block_state *state, fz_reader *r)
 {
     const gs_real dt = (gs_real)fz_log_range(r, 1e-6, 0.1);
     for (int k = 0; k < STEPS; ++k) {
@@ -162,7 +165,7 @@ static void step_rack(gs_rack_pinion *rp, fz_reader *r)
         in.temperature_K = in_range(r, 1.0, 1e3);
         in.use_temperature_input = fz_u8(r) & 1;
         gs_rack_ports_out o;
-        gs_rack_pinion_step(rp, dt, &in, &o);
+        gs_rack_pinion_step(consts, state, dt, &in, &o);
         CHECK_FINITE(o.pinion_torque_Nm, "pinion_torque_Nm");
         CHECK_FINITE(o.rack_force_N, "rack_force_N");
         CHECK_FINITE(o.rack_velocity_m_s, "rack_velocity_m_s");
@@ -175,20 +178,22 @@ static void step_rack(gs_rack_pinion *rp, fz_reader *r)
     }
 }
 
-static void step_rig(gs_rig *rig, fz_reader *r)
+static void step_rig(const gs_rig_consts *consts, gs_rig_state *state, fz_reader *r)
 {
     for (int k = 0; k < STEPS; ++k) {
         gs_rig_input in;
-        in.base_speed_rad_s = in_range(r, -1e3, 1e3);
-        in.base_torque_Nm = in_range(r, -1e3, 1e3);
+        in.base_speed = in_range(r, -1e3, 1e3);
+        in.base_torque = in_range(r, -1e3, 1e3);
         in.load = in_range(r, -1e3, 1e3);
-        in.ambient_temperature_K = in_range(r, 1.0, 1e3);
-        in.measured_temperature_K = in_range(r, 1.0, 1e3);
+        in.ambient_temperature = in_range(r, 1.0, 1e3);
+        in.measured_temperature = in_range(r, 1.0, 1e3);
         gs_rig_output o;
-        gs_rig_step(rig, &in, &o);
-        const gs_real *v = &o.base_torque_Nm;
+        gs_rig_step(consts, state, &in, &o);
+        gs_real v[GS_RIG_OUTPUT_FIELDS];
+        fz_rig_output_values(&o, v);
         for (int i = 0; i < GS_RIG_OUTPUT_FIELDS; ++i) {
-            FZ_CHECK(fz_finite(v[i]), "rig output field %d = %g at step %d", i, (double)v[i], k);
+            FZ_CHECK(fz_finite(v[i]), "rig output field %d (%s) = %g at step %d", i, fz_rig_output_name(i),
+                     (double)v[i], k);
         }
     }
 }
@@ -218,6 +223,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
     }
 
+    /* which model pointer is NULL when null_arg == 1: the constants or the state */
+    const int null_state = null_arg == 1 && (fz_u8(&r) & 1U) != 0;
+    const int null_consts = null_arg == 1 && !null_state;
+
     gs_error err_store;
     memset(&err_store, 0x5A, sizeof err_store);
     gs_error *err = use_err ? &err_store : NULL;
@@ -230,45 +239,54 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 #endif
     switch (target) {
     case 0: {
-        gs_simple_gear gear;
-        memset(&gear, 0xA5, sizeof gear);
-        st = gs_simple_gear_init(null_arg == 1 ? NULL : &gear, null_arg >= 2 ? NULL : &gp, err);
-        check_error(st, err, untouched(&gear, sizeof gear));
+        gs_simple_gear_consts consts;
+        gs_block_state state;
+        memset(&consts, 0xA5, sizeof consts);
+        memset(&state, 0xA5, sizeof state);
+        st = gs_simple_gear_init(null_consts ? NULL : &consts, null_state ? NULL : &state, null_arg >= 2 ? NULL : &gp,
+                                 err);
+        check_error(st, err, untouched(&consts, sizeof consts) && untouched(&state, sizeof state));
         FZ_CHECK(!null_arg || st == GS_E_NULL, "NULL argument gave status %d", (int)st);
         envelope = gear_in_envelope(&gp);
         if (st == GS_OK && (strict || envelope)) {
-            step_gear(&gear, &r);
+            step_gear(&consts, &state, &r);
         }
         break;
     }
     case 1: {
-        gs_rack_pinion rack;
-        memset(&rack, 0xA5, sizeof rack);
-        st = gs_rack_pinion_init(null_arg == 1 ? NULL : &rack, null_arg >= 2 ? NULL : &kp, err);
-        check_error(st, err, untouched(&rack, sizeof rack));
+        gs_rack_pinion_consts consts;
+        gs_block_state state;
+        memset(&consts, 0xA5, sizeof consts);
+        memset(&state, 0xA5, sizeof state);
+        st = gs_rack_pinion_init(null_consts ? NULL : &consts, null_state ? NULL : &state, null_arg >= 2 ? NULL : &kp,
+                                 err);
+        check_error(st, err, untouched(&consts, sizeof consts) && untouched(&state, sizeof state));
         FZ_CHECK(!null_arg || st == GS_E_NULL, "NULL argument gave status %d", (int)st);
         envelope = rack_in_envelope(&kp);
         if (st == GS_OK && (strict || envelope)) {
-            step_rack(&rack, &r);
+            step_rack(&consts, &state, &r);
         }
         break;
     }
     default: {
-        gs_rig rig;
-        memset(&rig, 0xA5, sizeof rig);
-        gs_rig *rig_arg = null_arg == 1 ? NULL : &rig;
+        gs_rig_consts consts;
+        gs_rig_state state;
+        memset(&consts, 0xA5, sizeof consts);
+        memset(&state, 0xA5, sizeof state);
+        gs_rig_consts *consts_arg = null_consts ? NULL : &consts;
+        gs_rig_state *state_arg = null_state ? NULL : &state;
         const gs_rig_params *rp_arg = null_arg == 3 ? NULL : &rp;
         if (target == 2) {
-            st = gs_rig_init_gear(rig_arg, null_arg == 2 ? NULL : &gp, rp_arg, err);
+            st = gs_rig_init_gear(consts_arg, state_arg, null_arg == 2 ? NULL : &gp, rp_arg, err);
             envelope = gear_in_envelope(&gp) && rig_in_envelope(&rp);
         } else {
-            st = gs_rig_init_rack(rig_arg, null_arg == 2 ? NULL : &kp, rp_arg, err);
+            st = gs_rig_init_rack(consts_arg, state_arg, null_arg == 2 ? NULL : &kp, rp_arg, err);
             envelope = rack_in_envelope(&kp) && rig_in_envelope(&rp);
         }
-        check_error(st, err, untouched(&rig, sizeof rig));
+        check_error(st, err, untouched(&consts, sizeof consts) && untouched(&state, sizeof state));
         FZ_CHECK(!null_arg || st == GS_E_NULL, "NULL argument gave status %d", (int)st);
         if (st == GS_OK && (strict || envelope)) {
-            step_rig(&rig, &r);
+            step_rig(&consts, &state, &r);
         }
         break;
     }

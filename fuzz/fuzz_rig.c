@@ -13,16 +13,17 @@
  *
  * Properties, every step:
  *   - no crash, no sanitizer report; every output finite;
- *   - rigid mesh: port_power_W == loss_power_W to rounding, and
- *     loss_power_W >= 0 (passive smoothing; Simscape smoothing is documented
+ *   - rigid mesh: port_power == loss_power to rounding, and
+ *     loss_power >= 0 (passive smoothing; Simscape smoothing is documented
  *     as slightly active, so only the balance is checked there);
  *   - backlash, every friction model and smoothing: port_power*dt >=
- *     loss_power*dt + (contact_energy_J now - contact_energy_J before) -
+ *     loss_power*dt + (contact_energy now - contact_energy before) -
  *     rounding tolerance (no energy created), and with the no-pull clip
  *     loss_power*dt >= -tolerance (the balance alone cannot see a negative
  *     loss that the spring absorbs);
- *   - determinism: a copy of the rig (snapshot) stepped with the same input
- *     gives the same bits, and gs_rig_run gives the bits of gs_rig_step. */
+ *   - determinism: a copy of the state (snapshot), stepped with a copy of
+ *     the constants and the same input, gives the same bits, and gs_rig_run
+ *     gives the bits of gs_rig_step. */
 #include "fuzz_common.h"
 
 #define MAX_STEPS 256
@@ -40,6 +41,8 @@
 #define FZ_STRICT_ENERGY 0
 #endif
 
+/* What the checks need to know of a rig: from its parameters (the constants
+ * are opaque) and gs_rig_get_info. */
 typedef struct {
     int gear;
     int backlash;
@@ -47,7 +50,32 @@ typedef struct {
     int passive;
     double r_base;
     double r_follow;
+    double dt;                     /* dt_s */
+    int substeps;                  /* gs_rig_info.contact_substeps (1 without backlash) */
+    int torque_driven;             /* base_drive == GS_BASE_TORQUE_DRIVEN */
+    double load_offset;
+    double load_coulomb;
+    double stiffness;              /* backlash K, D, b/2, no-pull */
+    double damping;
+    double half_gap;
+    int no_pull;
+    double inv_eff_mass_contact;   /* 1/m_eff at the pitch line for one sub-step (backlash) */
 } rig_info;
+
+/* 1/m_eff at the pitch line for the sub-step h = dt/substeps, viscous terms
+ * implicit, as the rig's init derives it (docs/physics.md section 11):
+ * r_F^2/(J_F + h*mu_F), plus r_B^2/(J_B + h*mu_B) for a torque-driven base;
+ * in gs_real, as the library computes it. */
+static double contact_inverse_mass(const gs_rig_params *rp, gs_real r_base, gs_real r_follow, gs_real mu_base,
+                                   gs_real mu_follow, int substeps)
+{
+    const gs_real h = rp->dt_s / (gs_real)substeps;
+    gs_real inv = r_follow * r_follow / (rp->driven_inertia + h * mu_follow);
+    if (rp->base_drive == GS_BASE_TORQUE_DRIVEN) {
+        inv += r_base * r_base / (rp->base_inertia_kg_m2 + h * mu_base);
+    }
+    return (double)inv;
+}
 
 /* Strictly increasing table of n breakpoints from lo with steps in [0.1, 50]. */
 static void table_x(fz_reader *r, gs_real *x, int n, double lo)
@@ -82,7 +110,7 @@ static void set_backlash(fz_reader *r, gs_backlash_params *b, uint8_t cfg, int g
     b->contact_release_force_N = (fz_u8(r) & 3U) == 0 ? (gs_real)0.0 : (gs_real)fz_log_range(r, 1e-3, 1e3);
 }
 
-static gs_status build(fz_reader *r, gs_rig *rig, rig_info *info)
+static gs_status build(fz_reader *r, gs_rig_consts *consts, gs_rig_state *state, rig_info *info)
 {
     const uint8_t c0 = fz_u8(r), c1 = fz_u8(r), c2 = fz_u8(r), c3 = fz_u8(r);
     gs_rig_params rp = gs_rig_params_default();
@@ -108,6 +136,8 @@ static gs_status build(fz_reader *r, gs_rig *rig, rig_info *info)
     info->friction = GS_FRICTION_NONE;
     gs_error err;
     gs_status st;
+    gs_backlash_params bl; /* the block's backlash parameters, kept past the block's scope */
+    gs_real r_base, r_follow, mu_base, mu_follow;
     if (info->gear) {
         gs_simple_gear_params g = gs_simple_gear_params_default();
         g.teeth_ratio = (gs_real)fz_log_range(r, 1e-3, 1e3);
@@ -141,12 +171,17 @@ static gs_status build(fz_reader *r, gs_rig *rig, rig_info *info)
             set_backlash(r, &g.backlash, c3 >> 2, 1);
         }
         info->friction = g.friction_model;
-        st = gs_rig_init_gear(rig, &g, &rp, &err);
+        st = gs_rig_init_gear(consts, state, &g, &rp, &err);
         if (fz_verbose()) {
             fz_dump("gear", &g, fz_gear_fields, FZ_COUNT(fz_gear_fields));
         }
         info->r_base = (double)g.backlash.base_radius_m;
         info->r_follow = (double)g.teeth_ratio * (double)g.backlash.base_radius_m;
+        bl = g.backlash;
+        r_base = g.backlash.base_radius_m;
+        r_follow = g.teeth_ratio * g.backlash.base_radius_m;
+        mu_base = g.viscous_coefficients[0];
+        mu_follow = g.viscous_coefficients[1];
     } else {
         static const gs_friction_model rack_models[3] = {GS_FRICTION_NONE, GS_FRICTION_CONSTANT_EFFICIENCY,
                                                          GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY};
@@ -173,37 +208,45 @@ static gs_status build(fz_reader *r, gs_rig *rig, rig_info *info)
             set_backlash(r, &k.backlash, c3 >> 2, 0);
         }
         info->friction = k.friction_model;
-        st = gs_rig_init_rack(rig, &k, &rp, &err);
+        st = gs_rig_init_rack(consts, state, &k, &rp, &err);
         if (fz_verbose()) {
             fz_dump("rack", &k, fz_rack_fields, FZ_COUNT(fz_rack_fields));
         }
         info->r_base = (double)gs_rack_pinion_radius(&k);
         info->r_follow = 1.0;
+        bl = k.backlash;
+        r_base = gs_rack_pinion_radius(&k);
+        r_follow = (gs_real)1.0;
+        mu_base = k.pinion_viscous_coefficient;
+        mu_follow = k.rack_viscous_coefficient;
     }
     if (fz_verbose()) {
         fz_dump("rp", &rp, fz_rig_fields, FZ_COUNT(fz_rig_fields));
     }
     FZ_CHECK(st == GS_OK, "generated parameters rejected: %s: %s", err.parameter, err.message);
+    gs_rig_info ri;
+    gs_rig_get_info(consts, &ri);
+    info->dt = (double)rp.dt_s;
+    info->substeps = ri.contact_substeps;
+    info->torque_driven = rp.base_drive == GS_BASE_TORQUE_DRIVEN;
+    info->load_offset = (double)rp.load_offset;
+    info->load_coulomb = (double)rp.load_coulomb_friction;
+    info->stiffness = (double)bl.stiffness_N_m;
+    info->damping = (double)bl.damping_N_s_m;
+    info->half_gap = 0.5 * (double)bl.linear_backlash_m;
+    info->no_pull = bl.no_pull != 0;
+    info->inv_eff_mass_contact =
+        info->backlash ? contact_inverse_mass(&rp, r_base, r_follow, mu_base, mu_follow, ri.contact_substeps) : 0.0;
     if (fz_verbose()) {
-        const gs_mesh_ *m = &rig->mesh;
         fprintf(stderr,
                 "rig: %s, %s-driven, friction %d (%s), backlash %d (hard stop %d, no_pull %d, lock %d), "
-                "dt %.9g, substeps %d, ratio %.9g, r_B %.9g, r_F %.9g, half gap %.9g, 1/d %.9g, K %.9g, D %.9g, "
-                "x0 %.9g, J_B %.9g, J_F %.9g, mu %.9g %.9g, eta %.9g, p_th %.9g, load coulomb %.9g / %.9g, "
-                "offset %.9g, heat path %d, T source %d\n",
-                info->gear ? "gear" : "rack", rig->base_drive == GS_BASE_SPEED_DRIVEN ? "speed" : "torque",
-                (int)m->friction, info->passive ? "passive" : "simscape", m->backlash, (int)m->hard_stop, m->no_pull,
-                m->lock_enabled, (double)rig->dt, rig->substeps, (double)m->ratio, (double)m->base_radius,
-                (double)m->follower_radius, (double)m->half_gap, (double)m->inv_transition, (double)m->stiffness,
-                (double)m->damping, (double)m->initial_position, (double)rig->base_inertia,
-                (double)rig->driven_inertia, (double)m->mu_base, (double)m->mu_follower, (double)m->eta,
-                (double)m->power_threshold, (double)rig->load_coulomb,
-                1.0 / (double)rig->inv_load_speed_threshold, (double)rig->load_offset, rig->heat_path,
-                (int)rig->temperature_source);
-        fprintf(stderr, "  lock speed %.9g, release %.9g, T0 %.9g, C_th %.9g, 1/R_th %.9g, accel gain %.9g, "
-                "initial base speed %.9g\n", (double)m->lock_speed, (double)m->lock_release_force,
-                (double)m->initial_temperature, (double)m->thermal_mass, (double)rig->inv_thermal_resistance,
-                (double)rig->accel_gain, (double)rig->initial_base_speed);
+                "dt %.9g, substeps %d (capped %d), h*omega_n %.9g, follower per base %.9g, r_B %.9g, r_F %.9g, "
+                "half gap %.9g, K %.9g, D %.9g, 1/m_eff %.9g\n",
+                info->gear ? "gear" : "rack", info->torque_driven ? "torque" : "speed", (int)info->friction,
+                info->passive ? "passive" : "simscape", info->backlash, (int)bl.hard_stop_model, bl.no_pull,
+                bl.lock_enabled, info->dt, ri.contact_substeps, ri.substeps_capped, (double)ri.contact_h_omega_n,
+                (double)ri.follower_per_base, info->r_base, info->r_follow, info->half_gap, info->stiffness,
+                info->damping, info->inv_eff_mass_contact);
     }
     return st;
 }
@@ -237,81 +280,87 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     fz_reader r = {data, size};
-    gs_rig rig;
+    gs_rig_consts consts;
+    gs_rig_state state;
     rig_info info;
-    if (build(&r, &rig, &info) != GS_OK) {
+    if (build(&r, &consts, &state, &info) != GS_OK) {
         return 0;
     }
     const double eps = FZ_EPS;
-    const double dt = (double)rig.dt;
+    const double dt = info.dt;
     /* Conditioning of the backward-Euler contact solve: kappa = c*(K*h + D)
      * with c = h/m_eff. When kappa*eps approaches 1 (float, stiff contact on a
      * light side), the impulse balance loses its significant digits: known
      * limit L2 (docs/hardening.md). Without -DFZ_STRICT such rigs are still
      * stepped (no crash, no UB) but their outputs are not checked. */
-    const double h_sub = dt / (double)rig.substeps;
-    const double kappa = info.backlash ? h_sub * (double)rig.inv_eff_mass_contact
-                                             * ((double)rig.mesh.stiffness * h_sub + (double)rig.mesh.damping)
+    const double h_sub = dt / (double)info.substeps;
+    const double kappa = info.backlash ? h_sub * info.inv_eff_mass_contact
+                                             * (info.stiffness * h_sub + info.damping)
                                        : 0.0;
     const int checked = FZ_STRICT_ENERGY || kappa * eps <= 1e-4;
-    gs_rig shadow = rig;
-    gs_rig batch = rig;
+    /* snapshots: copies of the state; the shadow steps with a copy of the
+     * constants (plain data, no pointers) */
+    const gs_rig_consts consts_copy = consts;
+    gs_rig_state shadow = state;
+    gs_rig_state batch = state;
     gs_rig_input inputs[MAX_STEPS];
     gs_rig_output outputs[MAX_STEPS];
     double energy_before = 0.0;
     int k = 0;
     for (; k < MAX_STEPS && r.n >= 10; ++k) {
         gs_rig_input *in = &inputs[k];
-        in->base_speed_rad_s = input_value(&r, -1e3, 1e3);
-        in->base_torque_Nm = input_value(&r, -1e3, 1e3);
+        in->base_speed = input_value(&r, -1e3, 1e3);
+        in->base_torque = input_value(&r, -1e3, 1e3);
         in->load = input_value(&r, -1e3, 1e3);
-        in->ambient_temperature_K = input_value(&r, 1.0, 1e3);
-        in->measured_temperature_K = input_value(&r, 1.0, 1e3);
+        in->ambient_temperature = input_value(&r, 1.0, 1e3);
+        in->measured_temperature = input_value(&r, 1.0, 1e3);
         gs_rig_output *o = &outputs[k];
-        gs_rig_step(&rig, in, o);
+        gs_rig_step(&consts, &state, in, o);
+        gs_real v[GS_RIG_OUTPUT_FIELDS];
+        fz_rig_output_values(o, v);
         if (fz_verbose()) {
             fprintf(stderr, "step %d in: w_B %.17g tau_m %.17g load %.17g T_amb %.17g T_meas %.17g\n  out:", k,
-                    (double)in->base_speed_rad_s, (double)in->base_torque_Nm, (double)in->load,
-                    (double)in->ambient_temperature_K, (double)in->measured_temperature_K);
+                    (double)in->base_speed, (double)in->base_torque, (double)in->load,
+                    (double)in->ambient_temperature, (double)in->measured_temperature);
             for (int i = 0; i < GS_RIG_OUTPUT_FIELDS; ++i) {
-                fprintf(stderr, " %.9g", (double)(&o->base_torque_Nm)[i]);
+                fprintf(stderr, " %s %.9g", fz_rig_output_name(i), (double)v[i]);
             }
             fprintf(stderr, "\n");
         }
         gs_rig_output o2;
-        gs_rig_step(&shadow, in, &o2);
+        gs_rig_step(&consts_copy, &shadow, in, &o2);
         FZ_CHECK(same_bits(o, &o2), "a snapshot copy stepped differently at step %d", k);
         if (!checked) {
             continue;
         }
-        const gs_real *v = &o->base_torque_Nm;
         for (int i = 0; i < GS_RIG_OUTPUT_FIELDS; ++i) {
-            FZ_CHECK(fz_finite(v[i]), "output field %d = %g at step %d (kappa %.3g)", i, (double)v[i], k, kappa);
+            FZ_CHECK(fz_finite(v[i]), "output field %d (%s) = %g at step %d (kappa %.3g)", i, fz_rig_output_name(i),
+                     (double)v[i], k, kappa);
         }
 
-        const double port = (double)o->port_power_W;
-        const double loss = (double)o->loss_power_W;
-        const double w_b = fabs((double)o->base_speed_rad_s);
+        const double port = (double)o->port_power;
+        const double loss = (double)o->loss_power;
+        const double w_b = fabs((double)o->base_speed);
         const double w_f = fabs((double)o->follower_speed);
         /* magnitude of the terms whose rounding the balance carries */
-        const double scale = fabs((double)o->base_port_torque_Nm) * w_b
+        const double scale = fabs((double)o->base_port_torque) * w_b
                              + fabs((double)o->follower_port_torque) * w_f + fabs(loss) + fabs(port)
-                             + fabs((double)o->contact_force_N) * (info.r_base * w_b + info.r_follow * w_f);
+                             + fabs((double)o->contact_force) * (info.r_base * w_b + info.r_follow * w_f);
         /* With backlash the relative tooth speed is the difference of the free
          * speeds that the contact and external impulses produce in a sub-step;
          * on a light side those are much larger than the step's speeds, and
          * their rounding multiplies the contact force. */
-        const double f_abs = fabs((double)o->contact_force_N);
-        const double f_ext = (fabs((double)in->load) + fabs((double)rig.load_offset) + (double)rig.load_coulomb)
+        const double f_abs = fabs((double)o->contact_force);
+        const double f_ext = (fabs((double)in->load) + fabs(info.load_offset) + info.load_coulomb)
                                  / info.r_follow
-                             + (rig.base_drive == GS_BASE_TORQUE_DRIVEN ? fabs((double)in->base_torque_Nm) / info.r_base
+                             + (info.torque_driven ? fabs((double)in->base_torque) / info.r_base
                                                                         : 0.0);
         /* (f_abs + f_ext)^2, not f_abs*(f_abs + f_ext): the step means can
          * cancel (a locked light rack alternating between sliding and stuck
          * sub-steps has a mean force of 1e-16 N against 4.5 N per sub-step),
          * while the external push alone still makes large sub-step speeds */
         const double impulse_scale = info.backlash ? (f_abs + f_ext) * (f_abs + f_ext) * h_sub
-                                                         * (double)rig.inv_eff_mass_contact
+                                                         * info.inv_eff_mass_contact
                                                    : 0.0;
         if (!info.backlash) {
             FZ_CHECK(fabs(port - loss) <= 64.0 * eps * scale + 1e-300,
@@ -326,14 +375,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
              * reverses the follower, paired with the end speeds, for either
              * smoothing (the Simscape law's active sliver is not applied there):
              * the bound holds for every friction model. */
-            const double energy = (double)o->contact_energy_J;
+            const double energy = (double)o->contact_energy;
             const double created = (loss - port) * dt + (energy - energy_before);
             /* The backlash position is stored absolute: a sub-step's motion
              * below ulp(x) is lost while the ports still see it (float: x ~ b/2
              * resolves a stiff contact's penetration to a few hundred ulp). */
-            const double f_spring = sqrt(2.0 * (double)rig.mesh.stiffness * fmax(energy, energy_before));
-            const double quantum = 4.0 * (f_abs + f_spring) * eps * (fabs((double)o->backlash_position_m)
-                                                        + (double)rig.mesh.half_gap) * (double)rig.substeps
+            const double f_spring = sqrt(2.0 * info.stiffness * fmax(energy, energy_before));
+            const double quantum = 4.0 * (f_abs + f_spring) * eps * (fabs((double)o->backlash_position)
+                                                        + info.half_gap) * (double)info.substeps
                                    /* and the position moves by the rounding of the relative speed
                                     * r_B*w_B - r_F*w_F (locked teeth), against the spring */
                                    + 4.0 * f_spring * eps * (info.r_base * w_b + info.r_follow * w_f) * dt;
@@ -346,14 +395,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             /* The balance above cannot see a negative loss that the spring
              * absorbs (port = loss + dE/dt still holds): check the loss itself.
              * Not without the no-pull clip: known limit L3 (docs/hardening.md). */
-            if (rig.mesh.no_pull) {
+            if (info.no_pull) {
                 /* plus the contact solve's own accuracy: its root is found to
                  * NEWTON_TOLERANCE of the pitch-line speed scale, which the
                  * impulse-balance force carries as (1 + kappa)/c times that,
                  * against the closing speed */
                 const double v_scale = info.r_base * w_b + info.r_follow * w_f
-                                       + h_sub * f_abs * (double)rig.inv_eff_mass_contact;
-                const double c_sub = h_sub * (double)rig.inv_eff_mass_contact;
+                                       + h_sub * f_abs * info.inv_eff_mass_contact;
+                const double c_sub = h_sub * info.inv_eff_mass_contact;
                 const double solver = FZ_NEWTON_TOLERANCE * (1.0 + kappa) / c_sub * v_scale * v_scale * dt;
                 FZ_CHECK(loss * dt >= -(tol + solver), "backlash: loss_power %.9g W < 0 (tol %.3g J + solver %.3g J) at step %d",
                          loss, tol, solver, k);
@@ -363,7 +412,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     if (k > 0) {
         gs_rig_output run_out[MAX_STEPS];
-        gs_rig_run(&batch, (size_t)k, inputs, run_out);
+        gs_rig_run(&consts, &batch, (size_t)k, inputs, run_out);
         FZ_CHECK(memcmp(run_out, outputs, (size_t)k * sizeof outputs[0]) == 0,
                  "gs_rig_run differs from %d gs_rig_step calls", k);
     }

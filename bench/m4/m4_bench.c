@@ -31,7 +31,8 @@ void *memcpy(void *dst, const void *src, size_t n);
 
 volatile float g_sink;
 static gs_rig_input g_inputs[BENCH_PERIOD];
-static gs_rig g_rig;
+static gs_rig_consts g_consts;
+static gs_rig_state g_state;
 
 /* The library's struct copies and clears; byte loops keep the image free of libc. */
 void *memset(void *dst, int c, size_t n)
@@ -124,7 +125,7 @@ int main(void)
 
     for (size_t c = 0; c < N_CONFIGS; ++c) {
         gs_error err;
-        if (bench_setup(&CONFIGS[c], &g_rig, g_inputs, &err) != GS_OK) {
+        if (bench_setup(&CONFIGS[c], &g_consts, &g_state, g_inputs, &err) != GS_OK) {
             return 1;
         }
         gs_rig_output out;
@@ -132,8 +133,8 @@ int main(void)
         uint32_t k = 0;
         const uint32_t start = SYST_CVR;
         for (uint32_t i = 0; i < BENCH_M4_STEPS; ++i) {
-            gs_rig_step(&g_rig, &g_inputs[k], &out);
-            acc += out.base_torque_Nm;
+            gs_rig_step(&g_consts, &g_state, &g_inputs[k], &out);
+            acc += out.base_torque;
             if (++k == BENCH_PERIOD) {
                 k = 0;
             }

@@ -14,9 +14,10 @@ static int run_gear(void)
     gear.viscous_coefficients[0] = GS_R(1e-3);
     gs_rig_params rp = gs_rig_params_default();
     rp.driven_inertia = GS_R(0.05);
-    gs_rig rig;
+    gs_rig_consts consts; /* what init derives: read-only afterwards */
+    gs_rig_state state;   /* what a step updates */
     gs_error err;
-    if (gs_rig_init_gear(&rig, &gear, &rp, &err) != GS_OK) {
+    if (gs_rig_init_gear(&consts, &state, &gear, &rp, &err) != GS_OK) {
         fprintf(stderr, "gear rig: %s: %s\n", err.parameter, err.message);
         return 1;
     }
@@ -26,15 +27,15 @@ static int run_gear(void)
     for (int i = 0; i <= 3000; ++i) {
         const gs_real t = GS_R(1e-3) * (gs_real)i;
         gs_rig_input in = {0};
-        in.base_speed_rad_s = t < GS_R(1.0) ? GS_R(100.0) * t : (t < GS_R(2.0) ? GS_R(100.0) : GS_R(300.0) - GS_R(100.0) * t);
+        in.base_speed = t < GS_R(1.0) ? GS_R(100.0) * t : (t < GS_R(2.0) ? GS_R(100.0) : GS_R(300.0) - GS_R(100.0) * t);
         in.load = GS_R(-6.0);
-        in.ambient_temperature_K = GS_R(293.15);
+        in.ambient_temperature = GS_R(293.15);
         gs_rig_output out;
-        gs_rig_step(&rig, &in, &out);
+        gs_rig_step(&consts, &state, &in, &out);
         if (i % 250 == 0) {
-            printf("%8.3f %12.3f %12.3f %14.5f %14.5f %12.4f\n", (double)t, (double)in.base_speed_rad_s,
-                   (double)in.load, (double)out.base_torque_Nm, (double)out.follower_speed,
-                   (double)out.loss_power_W);
+            printf("%8.3f %12.3f %12.3f %14.5f %14.5f %12.4f\n", (double)t, (double)in.base_speed,
+                   (double)in.load, (double)out.base_torque, (double)out.follower_speed,
+                   (double)out.loss_power);
         }
     }
     return 0;
@@ -48,9 +49,10 @@ static int run_rack(void)
     gs_rig_params rp = gs_rig_params_default();
     rp.driven_inertia = GS_R(10.0); /* rack mass, kg */
     rp.load_coulomb_friction = GS_R(20.0);
-    gs_rig rig;
+    gs_rig_consts consts;
+    gs_rig_state state;
     gs_error err;
-    if (gs_rig_init_rack(&rig, &rack, &rp, &err) != GS_OK) {
+    if (gs_rig_init_rack(&consts, &state, &rack, &rp, &err) != GS_OK) {
         fprintf(stderr, "rack rig: %s: %s\n", err.parameter, err.message);
         return 1;
     }
@@ -59,12 +61,12 @@ static int run_rack(void)
     for (int i = 0; i <= 2000; ++i) {
         const gs_real t = GS_R(1e-3) * (gs_real)i;
         gs_rig_input in = {0};
-        in.base_speed_rad_s = t < GS_R(1.0) ? GS_R(20.0) : GS_R(-20.0);
+        in.base_speed = t < GS_R(1.0) ? GS_R(20.0) : GS_R(-20.0);
         gs_rig_output out;
-        gs_rig_step(&rig, &in, &out);
+        gs_rig_step(&consts, &state, &in, &out);
         if (i % 250 == 0) {
-            printf("%8.3f %12.3f %14.5f %14.5f %14.5f\n", (double)t, (double)in.base_speed_rad_s,
-                   (double)out.base_torque_Nm, (double)out.follower_speed, (double)out.follower_position);
+            printf("%8.3f %12.3f %14.5f %14.5f %14.5f\n", (double)t, (double)in.base_speed,
+                   (double)out.base_torque, (double)out.follower_speed, (double)out.follower_position);
         }
     }
     return 0;

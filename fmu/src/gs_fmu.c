@@ -10,14 +10,20 @@
  *   fmi2ExitInitializationMode. A refused value returns fmi2Error, logs the
  *   parameter named by gs_error and leaves the instance in initialisation
  *   mode so that the value can be corrected.
+ * - The rig is its constants (gs_rig_consts: derived by init from the
+ *   parameters, read-only afterwards) and its state (gs_rig_state).
  * - Tunable parameters set in step mode are validated at once (the new values
- *   go through the rig init, the running state is carried over); a refused
- *   value leaves every variable of the call unchanged.
+ *   go through the rig init into new constants; the running state is kept and
+ *   stepped on with them); a refused value leaves every variable of the call
+ *   unchanged.
  * - fmi2DoStep runs h/dt fixed steps of dt with the inputs held; h must be a
  *   whole multiple of dt. Outputs are those of the last internal step.
  * - The FMU state is the plain-data struct fmu_data (parameters, inputs,
- *   outputs and the gs_rig snapshot); serialisation writes it after a header
- *   and rebuilds the rig constants from the parameters when reading it back.
+ *   outputs and a copy of the gs_rig_state alone). The constants are not part
+ *   of it: they follow from the parameters, and are derived again only when a
+ *   restored state carries other parameters than the running ones.
+ *   Serialisation writes fmu_data after a header; reading it back validates
+ *   the parameters through the rig init.
  */
 #include <math.h>
 #include <stdarg.h>
@@ -52,13 +58,18 @@ typedef struct {
     gs_fmu_params params;
     gs_rig_input input;
     gs_rig_output output;
-    gs_rig rig;
+    gs_rig_state state;         /* the rig's state: what a step updates */
     double start_time;
     long long steps;            /* internal steps since start_time */
 } fmu_data;
 
 typedef struct {
     fmu_data d;
+    /* the rig's constants, derived from consts_params (valid when
+     * consts_ready); outside fmu_data, so that an FMU state does not copy them */
+    gs_rig_consts consts;
+    gs_fmu_params consts_params;
+    int consts_ready;
     size_t nvars;
     gs_fmu_var vars[GS_FMU_MAX_VARS];
     fmi2CallbackLogger logger;
@@ -216,42 +227,61 @@ static void report_parameter_error(const fmu *c, const fmu_data *d, const char *
                value, err->message != NULL ? err->message : gs_status_str(err->status), (int)err->status);
 }
 
-/* Re-initialises *rig from with->params (which validates them) and carries
- * its running state over, so that the rig constants always follow the
- * parameters. A refused value is logged and leaves *rig unchanged. */
-static int reinit_rig_keep_state(const fmu *c, const fmu_data *with, gs_rig *rig, const char *function)
+/* Validates with->params through the rig init and derives their constants
+ * into *consts; a refused value is logged and leaves *consts unchanged. The
+ * initial state that init also fills is dropped: the running state is kept
+ * (re-tuning is new constants stepping the old state). */
+static int derive_consts(const fmu *c, const fmu_data *with, gs_rig_consts *consts, const char *function)
 {
-    gs_rig fresh;
+    gs_rig_consts fresh;
+    gs_rig_state initial;
     gs_error err;
-    if (gs_fmu_init_rig(THIS_RIG, &with->params, &fresh, &err) != GS_OK) {
+    if (gs_fmu_init_rig(THIS_RIG, &with->params, &fresh, &initial, &err) != GS_OK) {
         report_parameter_error(c, with, function, &err);
         return 0;
     }
-    gs_rig_copy_state(&fresh, rig);
-    *rig = fresh;
+    *consts = fresh;
+    return 1;
+}
+
+/* Makes the constants follow the parameters of c->d, deriving them again
+ * only when those parameters changed. */
+static int sync_consts(fmu *c, const char *function)
+{
+    if (!c->d.rig_ready ||
+        (c->consts_ready && memcmp(&c->consts_params, &c->d.params, sizeof c->consts_params) == 0)) {
+        return 1;
+    }
+    if (!derive_consts(c, &c->d, &c->consts, function)) {
+        return 0;
+    }
+    c->consts_params = c->d.params;
+    c->consts_ready = 1;
     return 1;
 }
 
 /* Outputs before the first step: the initial state, zero torques and powers. */
-static void initial_outputs(fmu_data *d)
+static void initial_outputs(fmu_data *d, const gs_rig_consts *consts)
 {
-    const gs_rig *r = &d->rig;
+    const gs_rig_state *st = &d->state;
     gs_rig_output *o = &d->output;
+    gs_rig_info info;
+    gs_rig_get_info(consts, &info);
     memset(o, 0, sizeof *o);
-    if (r->base_drive == GS_BASE_SPEED_DRIVEN) {
+    if (d->params.rig.base_drive == GS_BASE_SPEED_DRIVEN) {
         /* the first step takes the input speed with teeth moving together */
-        o->base_speed_rad_s = d->input.base_speed_rad_s;
-        o->follower_speed = r->mesh.inv_ratio * d->input.base_speed_rad_s;
+        o->base_speed = d->input.base_speed;
+        o->follower_speed = info.follower_per_base * d->input.base_speed;
     } else {
-        o->base_torque_Nm = d->input.base_torque_Nm;
-        o->base_speed_rad_s = r->base_speed;
-        o->follower_speed = r->follower_speed;
+        o->base_torque = d->input.base_torque;
+        o->base_speed = st->base_speed;
+        o->follower_speed = st->follower_speed;
     }
-    o->base_angle_rad = r->base_angle;
-    o->follower_position = r->follower_position;
-    o->temperature_K = r->temperature_source == GS_TEMPERATURE_FROM_INPUT ? d->input.measured_temperature_K
-                                                                          : r->mesh.temperature;
-    o->backlash_position_m = r->mesh.position;
+    o->base_angle = st->base_angle;
+    o->follower_position = st->follower_position;
+    o->temperature = d->params.rig.temperature_source == GS_TEMPERATURE_FROM_INPUT ? d->input.measured_temperature
+                                                                                   : st->block.temperature;
+    o->backlash_position = st->block.backlash_position;
 }
 
 /* ---- common functions */
@@ -400,19 +430,25 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
     if (c == NULL || !allowed(c, "fmi2ExitInitializationMode", MODE_INITIALIZATION)) {
         return fmi2Error;
     }
-    gs_rig rig;
+    gs_rig_consts consts;
+    gs_rig_state state;
     gs_error err;
-    if (gs_fmu_init_rig(THIS_RIG, &c->d.params, &rig, &err) != GS_OK) {
+    if (gs_fmu_init_rig(THIS_RIG, &c->d.params, &consts, &state, &err) != GS_OK) {
         report_parameter_error(c, &c->d, "fmi2ExitInitializationMode", &err);
         return fmi2Error; /* still in initialization mode: the value can be corrected */
     }
-    c->d.rig = rig;
+    c->consts = consts;
+    c->consts_params = c->d.params;
+    c->consts_ready = 1;
+    c->d.state = state;
     c->d.rig_ready = 1;
     c->d.steps = 0;
-    initial_outputs(&c->d);
+    initial_outputs(&c->d, &c->consts);
     c->d.mode = MODE_STEP;
+    gs_rig_info info;
+    gs_rig_get_info(&c->consts, &info);
     log_info(c, "fmi2ExitInitializationMode: rig initialised, dt = %.17g s, %d contact sub-steps",
-             (double)rig.dt, rig.substeps);
+             (double)c->d.params.rig.dt_s, info.contact_substeps);
     return fmi2OK;
 }
 
@@ -433,6 +469,7 @@ fmi2Status fmi2Reset(fmi2Component comp)
         return fmi2Error;
     }
     instantiated_data(&c->d);
+    c->consts_ready = 0;
     return fmi2OK;
 }
 
@@ -527,10 +564,15 @@ static fmi2Status set_values(fmu *c, const char *function, gs_fmu_type type, con
     }
     if (parameter_set && c->d.mode == MODE_STEP && c->d.rig_ready &&
         memcmp(&staged.params, &c->d.params, sizeof staged.params) != 0) {
-        /* a tunable parameter of a running rig: validate, keep the state */
-        if (!reinit_rig_keep_state(c, &staged, &c->d.rig, function)) {
+        /* a tunable parameter of a running rig: validate, new constants, the
+         * same state */
+        gs_rig_consts consts;
+        if (!derive_consts(c, &staged, &consts, function)) {
             return fmi2Error;
         }
+        c->consts = consts;
+        c->consts_params = staged.params;
+        c->consts_ready = 1;
         log_info(c, "%s: tunable parameters applied at t = %.17g s", function, current_time(&c->d));
     }
     memcpy(&c->d.params, &staged.params, sizeof staged.params);
@@ -601,7 +643,7 @@ fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[], size
 /* ---- FMU state */
 
 #define STATE_MAGIC "GSFMI2S"   /* 7 characters and the NUL: 8 bytes */
-#define STATE_FORMAT 1u
+#define STATE_FORMAT 2u      /* 2: the rig's state alone (gs_rig_state), no constants */
 #define STATE_HEADER_SIZE (8 + 4 + 4 + 8 + GS_FMU_GUID_SIZE)
 #define STATE_SIZE (STATE_HEADER_SIZE + sizeof(fmu_data))
 
@@ -642,7 +684,14 @@ fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate state)
         log_status(c, fmi2Error, "fmi2SetFMUstate: NULL state");
         return fmi2Error;
     }
+    const fmu_data previous = c->d;
     memcpy(&c->d, state, sizeof(fmu_data));
+    /* the constants follow the restored parameters (derived again only if
+     * they differ from the running ones) */
+    if (!sync_consts(c, "fmi2SetFMUstate")) {
+        c->d = previous;
+        return fmi2Error;
+    }
     return fmi2OK;
 }
 
@@ -734,8 +783,10 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte serialized
         log_status(c, fmi2Error, "fmi2DeSerializeFMUstate: corrupt state");
         return fmi2Error;
     }
-    /* the bytes carry the state; the rig constants come from the parameters */
-    if (d.rig_ready && !reinit_rig_keep_state(c, &d, &d.rig, "fmi2DeSerializeFMUstate")) {
+    /* the bytes carry the rig's state; its parameters must pass the rig init
+     * (fmi2SetFMUstate derives the constants from them) */
+    gs_rig_consts check;
+    if (d.rig_ready && !derive_consts(c, &d, &check, "fmi2DeSerializeFMUstate")) {
         return fmi2Error;
     }
     return store_state(c, "fmi2DeSerializeFMUstate", state, &d);
@@ -797,7 +848,7 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicationPoint, fm
     if (c == NULL || !allowed(c, "fmi2DoStep", MODE_STEP)) {
         return fmi2Error;
     }
-    const double dt = (double)c->d.rig.dt;
+    const double dt = (double)c->d.params.rig.dt_s;
     const double h = communicationStepSize;
     if (!isfinite(h) || !(h > 0.0)) {
         log_status(c, fmi2Error, "fmi2DoStep: communication step size %.17g s must be finite and > 0", h);
@@ -823,7 +874,7 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicationPoint, fm
     }
     const long long steps = (long long)n;
     for (long long k = 0; k < steps; ++k) {
-        gs_rig_step(&c->d.rig, &c->d.input, &c->d.output);
+        gs_rig_step(&c->consts, &c->d.state, &c->d.input, &c->d.output);
     }
     c->d.steps += steps;
     return fmi2OK;

@@ -3,7 +3,9 @@
  * Names are the program names of docs/physics.md sections 9-11 and of
  * docs/python-api.md; tables are scalarised with the "structured" naming
  * convention (temperature_vector[1], efficiency_matrix[2,3], 1-based), their
- * used length set by temperature_count / load_count. */
+ * used length set by temperature_count / load_count. The inputs and outputs
+ * come from gearsim/fields.h: the same names as the C structs, the Python
+ * package and the firmware columns. */
 #include <stdio.h>
 #include <string.h>
 
@@ -20,6 +22,13 @@ typedef char gs_fmu_enum_size_check_[(sizeof(gs_friction_model) == sizeof(int) &
                                       sizeof(gs_temperature_source) == sizeof(int))
                                          ? 1
                                          : -1];
+
+/* Every input and output is a gs_real (gearsim/rig.h): the tables below store
+ * them as GS_FMU_S_REAL. */
+typedef char gs_fmu_io_real_check_[(sizeof(gs_rig_input) == GS_RIG_INPUT_FIELDS * sizeof(gs_real) &&
+                                    sizeof(gs_rig_output) == GS_RIG_OUTPUT_FIELDS * sizeof(gs_real))
+                                       ? 1
+                                       : -1];
 
 /* ---- enumeration types (values are the C enum values) */
 
@@ -61,8 +70,10 @@ static const gs_fmu_enum_item rack_direction_items[] = {
     {"negative", GS_RACK_NEGATIVE, "positive pinion rotation moves the rack in - (s_R = -1)"},
 };
 static const gs_fmu_enum_item base_drive_items[] = {
-    {"speed", GS_BASE_SPEED_DRIVEN, "input drive_speed is held; output base_torque is what the drive applies"},
-    {"torque", GS_BASE_TORQUE_DRIVEN, "input motor_torque acts on base_inertia; speeds are outputs"},
+    {"speed", GS_BASE_SPEED_DRIVEN,
+     "input " GS_FMU_INPUT_PREFIX "base_speed is held; output base_torque is what the drive applies"},
+    {"torque", GS_BASE_TORQUE_DRIVEN,
+     "input " GS_FMU_INPUT_PREFIX "base_torque acts on base_inertia; speeds are outputs"},
 };
 
 #define GS_FMU_COUNT(a) ((int)(sizeof(a) / sizeof((a)[0])))
@@ -120,6 +131,42 @@ const gs_fmu_unit *gs_fmu_units(size_t *count)
     return units;
 }
 
+/* The units of gearsim/fields.h are written as pint parses them; FMI writes
+ * products with '.' and powers without '^'. The spellings that differ: */
+static const struct {
+    const char *table;
+    const char *fmi;
+} unit_spellings[] = {
+    {"N*m", "N.m"},
+    {"rad/s^2", "rad/s2"},
+    {"m/s^2", "m/s2"},
+};
+
+const char *gs_fmu_unit_from_table(const char *table_unit, int *known)
+{
+    if (known != NULL) {
+        *known = 1;
+    }
+    if (table_unit == NULL || table_unit[0] == '\0' || strcmp(table_unit, "1") == 0) {
+        return NULL;
+    }
+    const char *fmi = table_unit;
+    for (size_t i = 0; i < sizeof unit_spellings / sizeof unit_spellings[0]; ++i) {
+        if (strcmp(table_unit, unit_spellings[i].table) == 0) {
+            fmi = unit_spellings[i].fmi;
+        }
+    }
+    for (size_t i = 0; i < sizeof units / sizeof units[0]; ++i) {
+        if (strcmp(fmi, units[i].name) == 0) {
+            return units[i].name;
+        }
+    }
+    if (known != NULL) {
+        *known = 0;
+    }
+    return NULL;
+}
+
 /* ---- variable tables */
 
 /* Which rig an entry belongs to. */
@@ -141,6 +188,9 @@ typedef struct {
     const char *rack_name;
     const char *rack_unit;
     const char *rack_description;
+    /* 1: unit and rack_unit are units of gearsim/fields.h (pint syntax),
+     * translated by gs_fmu_unit_from_table */
+    int table_units;
 } entry;
 
 #define REAL_(T, nm, fld, var, un, desc) \
@@ -168,7 +218,8 @@ static const entry rig_entries[] = {
     REAL_(gs_rig_params, "dt", dt_s, FIXED, "s",
           "fixed internal step; every communication step must be a whole multiple of it"),
     ENUM_(gs_rig_params, "base_drive", base_drive, "BaseDrive",
-          "base (pinion) shaft: speed-driven (input drive_speed) or torque-driven (input motor_torque)"),
+          "base (pinion) shaft: speed-driven (" GS_FMU_INPUT_PREFIX "base_speed) or torque-driven ("
+          GS_FMU_INPUT_PREFIX "base_torque)"),
     REAL_(gs_rig_params, "base_inertia", base_inertia_kg_m2, FIXED, "kg.m2",
           "base (pinion) shaft inertia: > 0 when torque-driven; speed-driven adds base_inertia*alpha to base_torque"),
     REAL_(gs_rig_params, "initial_base_speed", initial_base_speed_rad_s, FIXED, "rad/s",
@@ -190,11 +241,13 @@ static const entry rig_entries[] = {
      .description = "constant torque on the follower (gravity, cable drag)", .rack_unit = "N",
      .rack_description = "constant force on the rack (gravity on an inclined axis, cable drag)"},
     BOOL_(gs_rig_params, "heat_path", heat_path,
-          "true: heat flows to ambient_temperature through thermal_resistance; false: adiabatic"),
+          "true: heat flows to " GS_FMU_INPUT_PREFIX
+          "ambient_temperature through thermal_resistance; false: adiabatic"),
     REAL_(gs_rig_params, "thermal_resistance", thermal_resistance_K_W, TUNABLE, "K/W",
           "housing-to-ambient thermal resistance R_th (> 0 when heat_path)"),
     BOOL_(gs_rig_params, "temperature_input", temperature_source,
-          "true: temperature-dependent losses use the input measured_temperature instead of the thermal state"),
+          "true: temperature-dependent losses use " GS_FMU_INPUT_PREFIX
+          "measured_temperature instead of the thermal state"),
     REAL_(gs_rig_params, "accel_filter_time_constant", accel_filter_time_constant_s, FIXED, "s",
           "speed-driven: first-order low-pass on the base acceleration (0 = raw backward difference)"),
     INT_(gs_rig_params, "contact_substeps", contact_substeps,
@@ -299,47 +352,18 @@ static const entry backlash_entries[] = {
           "lock mode: static contact release force threshold (>= 0)"),
 };
 
-static const entry input_entries[] = {
-    REAL_(gs_rig_input, "drive_speed", base_speed_rad_s, CONT, "rad/s",
-          "speed-driven: base (pinion) shaft speed the drive holds (ignored when torque-driven)"),
-    REAL_(gs_rig_input, "motor_torque", base_torque_Nm, CONT, "N.m",
-          "torque-driven: motor torque on base_inertia (ignored when speed-driven)"),
-    {.name = "load", .type = GS_FMU_T_REAL, .variability = CONT, .storage = GS_FMU_S_REAL,
-     .offset = offsetof(gs_rig_input, load), .unit = "N.m",
-     .description = "external load torque on the follower, + along positive follower rotation",
-     .rack_unit = "N", .rack_description = "external load force on the rack, + along the positive rack direction"},
-    REAL_(gs_rig_input, "ambient_temperature", ambient_temperature_K, CONT, "K",
-          "ambient temperature (used when heat_path)"),
-    REAL_(gs_rig_input, "measured_temperature", measured_temperature_K, CONT, "K",
-          "measured gear temperature (used when temperature_input)"),
-};
+/* Inputs and outputs: one entry per field of gearsim/fields.h, in its order
+ * (the inputs' names under GS_FMU_INPUT_PREFIX). */
+#define IO_(strct, fmi_name, nm, gear_unit, rack_unit_, doc)                                                \
+    {.name = fmi_name, .type = GS_FMU_T_REAL, .variability = CONT, .storage = GS_FMU_S_REAL,             \
+     .offset = offsetof(strct, nm), .unit = gear_unit, .rack_unit = rack_unit_, .description = doc,       \
+     .table_units = 1},
+#define INPUT_(type, nm, gear_unit, rack_unit_, doc) \
+    IO_(gs_rig_input, GS_FMU_INPUT_PREFIX #nm, nm, gear_unit, rack_unit_, doc)
+#define OUTPUT_(type, nm, gear_unit, rack_unit_, doc) IO_(gs_rig_output, #nm, nm, gear_unit, rack_unit_, doc)
 
-#define OUT_(nm, fld, un, desc) REAL_(gs_rig_output, nm, fld, CONT, un, desc)
-#define OUT2_(nm, fld, un, desc, run, rdesc) \
-    {.name = nm, .type = GS_FMU_T_REAL, .variability = CONT, .storage = GS_FMU_S_REAL, \
-     .offset = offsetof(gs_rig_output, fld), .unit = un, .description = desc, .rack_unit = run, \
-     .rack_description = rdesc}
-
-static const entry output_entries[] = {
-    OUT_("base_torque", base_torque_Nm, "N.m",
-         "torque the drive applies to the base shaft (torque-driven: the input motor_torque)"),
-    OUT_("base_speed", base_speed_rad_s, "rad/s", "base (pinion) shaft speed"),
-    OUT_("base_angle", base_angle_rad, "rad", "base (pinion) shaft angle"),
-    OUT2_("follower_speed", follower_speed, "rad/s", "follower shaft speed", "m/s", "rack velocity"),
-    OUT2_("follower_position", follower_position, "rad", "follower shaft angle", "m", "rack position"),
-    OUT_("base_port_torque", base_port_torque_Nm, "N.m", "torque the base shaft applies to the block"),
-    OUT2_("follower_port_torque", follower_port_torque, "N.m", "torque the follower side applies to the block",
-          "N", "force the rack side applies to the block"),
-    OUT_("mesh_loss_power", mesh_loss_power_W, "W", "meshing loss power (>= 0)"),
-    OUT_("loss_power", loss_power_W, "W", "mesh + viscous + contact damping loss power"),
-    OUT_("port_power", port_power_W, "W", "power into the block through both ports"),
-    OUT_("contact_energy", contact_energy_J, "J", "energy stored in the backlash contact spring"),
-    OUT_("temperature", temperature_K, "K", "block temperature (thermal state, or measured_temperature)"),
-    OUT_("backlash_position", backlash_position_m, "m", "backlash position x"),
-    OUT_("contact_force", contact_force_N, "N", "backlash contact force, mean over the last internal step"),
-    OUT2_("follower_acceleration", follower_acceleration, "rad/s2", "follower angular acceleration", "m/s2",
-          "rack acceleration"),
-};
+static const entry input_entries[] = {GS_RIG_INPUT_LIST(INPUT_)};
+static const entry output_entries[] = {GS_RIG_OUTPUT_LIST(OUTPUT_)};
 
 typedef struct {
     const entry *entries;
@@ -382,6 +406,13 @@ static size_t expand(const group *g, gs_fmu_rig rig, gs_fmu_var *vars, size_t n,
                 v->storage = en->storage;
                 v->offset = g->base + en->offset + (size_t)i * en->stride1 + (size_t)j * en->stride2;
                 v->unit = rack && en->rack_unit ? en->rack_unit : en->unit;
+                if (en->table_units) {
+                    int known;
+                    v->unit = gs_fmu_unit_from_table(v->unit, &known);
+                    if (!known) {
+                        return 0;
+                    }
+                }
                 v->enum_type = en->enum_type;
                 v->description = rack && en->rack_description ? en->rack_description : en->description;
             }
@@ -422,14 +453,15 @@ void gs_fmu_defaults(gs_fmu_params *params, gs_rig_input *input)
     params->rack = gs_rack_pinion_params_default();
     params->rig = gs_rig_params_default();
     memset(input, 0, sizeof *input);
-    input->ambient_temperature_K = GS_R(293.15);
-    input->measured_temperature_K = GS_R(300.0);
+    input->ambient_temperature = GS_R(293.15);
+    input->measured_temperature = GS_R(300.0);
 }
 
-gs_status gs_fmu_init_rig(gs_fmu_rig rig, const gs_fmu_params *params, gs_rig *out, gs_error *err)
+gs_status gs_fmu_init_rig(gs_fmu_rig rig, const gs_fmu_params *params, gs_rig_consts *consts,
+                          gs_rig_state *state, gs_error *err)
 {
-    return rig == GS_FMU_RIG_GEAR ? gs_rig_init_gear(out, &params->gear, &params->rig, err)
-                                  : gs_rig_init_rack(out, &params->rack, &params->rig, err);
+    return rig == GS_FMU_RIG_GEAR ? gs_rig_init_gear(consts, state, &params->gear, &params->rig, err)
+                                  : gs_rig_init_rack(consts, state, &params->rack, &params->rig, err);
 }
 
 double gs_fmu_read_real(const gs_fmu_var *v, const void *base)

@@ -3,7 +3,11 @@
  *
  * One table per rig (gear rig, rack rig) lists every FMI scalar variable:
  * name, type, causality, variability, unit, description and where its value
- * lives (a field of the C params, input or output structs). The FMU binary
+ * lives (a field of the C params, input or output structs). The inputs and
+ * outputs are expanded from gearsim/fields.h (GS_RIG_INPUT_LIST,
+ * GS_RIG_OUTPUT_LIST: name, unit of each rig, description), the inputs'
+ * names under GS_FMU_INPUT_PREFIX, their units translated to FMI syntax by
+ * gs_fmu_unit_from_table. The FMU binary
  * (gs_fmu.c) reads and writes values through it; the generator
  * (gs_fmu_modeldescription.c) writes modelDescription.xml and the docs table
  * from it, with start values read from gs_*_params_default(), so the two can
@@ -17,6 +21,12 @@
 #include <stddef.h>
 
 #include "gearsim/gearsim.h"
+
+/* FMI names of the inputs: this prefix and the name of gearsim/fields.h
+ * ("inputs.base_speed", a structured name). The outputs carry the table's
+ * names as they are; an input cannot, because base_speed and base_torque are
+ * both an input and an output of the rig and FMI variable names are unique. */
+#define GS_FMU_INPUT_PREFIX "inputs."
 
 #define GS_FMU_MAX_VARS 256
 #define GS_FMU_NAME_SIZE 48
@@ -87,14 +97,23 @@ typedef struct {
 } gs_fmu_unit;
 
 /* Fills vars (capacity >= GS_FMU_MAX_VARS) with the variables of a rig, in
- * value-reference order; returns their count (0 if capacity is too small). */
+ * value-reference order; returns their count (0 if capacity is too small or
+ * a unit of gearsim/fields.h has no FMI unit). */
 size_t gs_fmu_variables(gs_fmu_rig rig, gs_fmu_var *vars, size_t capacity);
 
 /* Start values: the C defaults of the block and rig, and the input starts. */
 void gs_fmu_defaults(gs_fmu_params *params, gs_rig_input *input);
 
-/* Validates params and initialises the rig (gs_rig_init_gear / _rack). */
-gs_status gs_fmu_init_rig(gs_fmu_rig rig, const gs_fmu_params *params, gs_rig *out, gs_error *err);
+/* Validates params and initialises the rig's constants and state
+ * (gs_rig_init_gear / _rack). */
+gs_status gs_fmu_init_rig(gs_fmu_rig rig, const gs_fmu_params *params, gs_rig_consts *consts,
+                          gs_rig_state *state, gs_error *err);
+
+/* The FMI unit (a name of gs_fmu_units()) of a unit of gearsim/fields.h,
+ * which are written as pint parses them ("N*m", "rad/s^2"); NULL for the
+ * dimensionless "1" or "", and for a unit without an FMI definition
+ * (*known = 0 then; known may be NULL). */
+const char *gs_fmu_unit_from_table(const char *table_unit, int *known);
 
 /* Value access. base is the gs_fmu_params, gs_rig_input or gs_rig_output the
  * variable's region names. */

@@ -101,31 +101,54 @@ RACK_FIELDS: dict[str, str] = {
 
 FIELDS = {"gear": GEAR_FIELDS, "rack": RACK_FIELDS}
 
+# The rig's inputs and outputs carry the names of gearsim/fields.h in every
+# layer. The FMU's inputs sit under the structured prefix "inputs." (an input
+# and an output are both called base_speed, and base_torque: FMI names are
+# unique); its outputs carry the names as they are.
+INPUT_PREFIX = "inputs."
+
 INPUTS = {  # FMI input -> gs_rig_input field
-    "drive_speed": "base_speed_rad_s",
-    "motor_torque": "base_torque_Nm",
-    "load": "load",
-    "ambient_temperature": "ambient_temperature_K",
-    "measured_temperature": "measured_temperature_K",
+    f"{INPUT_PREFIX}{field}": field
+    for field in (
+        "base_speed",
+        "base_torque",
+        "load",
+        "ambient_temperature",
+        "measured_temperature",
+    )
 }
 
 OUTPUTS = {  # FMI output (= Python RigResult name) -> gs_rig_output field
-    "base_torque": "base_torque_Nm",
-    "base_speed": "base_speed_rad_s",
-    "base_angle": "base_angle_rad",
-    "follower_speed": "follower_speed",
-    "follower_position": "follower_position",
-    "base_port_torque": "base_port_torque_Nm",
-    "follower_port_torque": "follower_port_torque",
-    "mesh_loss_power": "mesh_loss_power_W",
-    "loss_power": "loss_power_W",
-    "port_power": "port_power_W",
-    "contact_energy": "contact_energy_J",
-    "temperature": "temperature_K",
-    "backlash_position": "backlash_position_m",
-    "contact_force": "contact_force_N",
-    "follower_acceleration": "follower_acceleration",
+    name: name
+    for name in (
+        "base_torque",
+        "base_speed",
+        "base_angle",
+        "follower_speed",
+        "follower_position",
+        "base_port_torque",
+        "follower_port_torque",
+        "mesh_loss_power",
+        "loss_power",
+        "port_power",
+        "contact_energy",
+        "temperature",
+        "backlash_position",
+        "contact_force",
+        "follower_acceleration",
+    )
 }
+
+# gearsim/fields.h writes units as pint parses them; FMI spells these otherwise.
+FMI_UNIT = {"N*m": "N.m", "rad/s^2": "rad/s2", "m/s^2": "m/s2"}
+
+
+def fmi_unit(table_unit: str) -> str | None:
+    """The FMI unit of a unit of gearsim/fields.h (None: dimensionless)."""
+    if table_unit in ("", "1"):
+        return None
+    return FMI_UNIT.get(table_unit, table_unit)
+
 
 _INDEXED = re.compile(r"^([a-z_]+)\[(\d+)(?:,(\d+))?\]$")
 
@@ -155,6 +178,7 @@ def _preprocessed_header(repo: Path) -> str:
                 tmp,
                 "-I",
                 str(repo / "include"),
+                "-DGS_API=",  # no visibility attribute for cffi's parser
                 str(repo / "include" / "gearsim" / "gearsim.h"),
             ],
             check=True,
@@ -209,15 +233,31 @@ class Reference:
         arr[idx[-1]] = value
 
     def init(self, rig: str, start_values: Mapping[str, Any]):
-        """Returns (gs_rig *, gs_error *, status)."""
+        """Returns ((gs_rig_consts *, gs_rig_state *), gs_error *, status)."""
         structs = self.default_params(rig)
         for name, value in start_values.items():
             self.set(rig, structs, name, value)
-        r = self.ffi.new("gs_rig *")
+        consts = self.ffi.new("gs_rig_consts *")
+        state = self.ffi.new("gs_rig_state *")
         err = self.ffi.new("gs_error *")
         init = self.lib.gs_rig_init_gear if rig == "gear" else self.lib.gs_rig_init_rack
-        status = init(r, structs["block"], structs["rig"], err)
-        return r, err, status
+        status = init(consts, state, structs["block"], structs["rig"], err)
+        return (consts, state), err, status
+
+    def field_table(self, which: str) -> list[dict[str, Any]]:
+        """gs_rig_input_info / gs_rig_output_info of the library: name, units, doc."""
+        table = getattr(self.lib, f"gs_rig_{which}_info")
+        count = getattr(self.lib, f"GS_RIG_{which.upper()}_FIELDS")
+        string = self.ffi.string
+        return [
+            {
+                "name": string(table[i].name).decode(),
+                "gear_unit": string(table[i].gear_unit).decode(),
+                "rack_unit": string(table[i].rack_unit).decode(),
+                "doc": string(table[i].doc).decode(),
+            }
+            for i in range(count)
+        ]
 
     # -- runs
     def run(
@@ -229,7 +269,7 @@ class Reference:
     ) -> dict[str, np.ndarray]:
         """Holds inputs[k] for `substeps` steps of dt; returns the outputs after
         each group (one row per communication step)."""
-        r, err, status = self.init(rig, start_values)
+        (consts, state), err, status = self.init(rig, start_values)
         if status != 0:
             raise ValueError(f"C init refused {self.ffi.string(err.parameter).decode()}")
         n = len(next(iter(inputs.values())))
@@ -244,7 +284,7 @@ class Reference:
                 u[:, fields_in.index(field)] = np.repeat(
                     np.asarray(inputs[name], dtype=np.float64), substeps
                 )
-        self.lib.gs_rig_run(r, total, in_arr, out_arr)
+        self.lib.gs_rig_run(consts, state, total, in_arr, out_arr)
         y = np.frombuffer(self.ffi.buffer(out_arr), dtype=np.float64).reshape(
             total, len(fields_out)
         )

@@ -25,7 +25,14 @@ fmpy = pytest.importorskip("fmpy", reason="fmpy is not installed: run scripts/bu
 
 from fmpy.fmi1 import FMICallException  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
-from fmu_reference import FIELDS, INPUTS, OUTPUTS, split_name  # noqa: E402
+from fmu_reference import (  # noqa: E402
+    FIELDS,
+    INPUT_PREFIX,
+    INPUTS,
+    OUTPUTS,
+    fmi_unit,
+    split_name,
+)
 from fmu_support import FMU_DIR, MAX_DIFFS, REPO, RIGS  # noqa: E402
 
 FMI2_ERROR = 3
@@ -96,7 +103,8 @@ def test_every_parameter_with_c_default_and_unit(model_descriptions, reference, 
     by_name = {v.name: v for v in md.modelVariables}
     driven = "follower_inertia" if rig == "gear" else "rack_mass"
     assert by_name[driven].unit == ("kg.m2" if rig == "gear" else "kg")
-    assert by_name["load"].unit == ("N.m" if rig == "gear" else "N")
+    assert by_name["inputs.load"].unit == ("N.m" if rig == "gear" else "N")
+    assert by_name["follower_acceleration"].unit == ("rad/s2" if rig == "gear" else "m/s2")
     assert by_name["follower_speed"].unit == ("rad/s" if rig == "gear" else "m/s")
     assert by_name["dt"].unit == "s" and by_name["dt"].variability == "fixed"
     assert by_name["efficiency_const"].variability == "tunable"
@@ -106,12 +114,21 @@ def test_every_parameter_with_c_default_and_unit(model_descriptions, reference, 
 
 
 @pytest.mark.parametrize("rig", RIGS)
-def test_inputs_and_outputs(model_descriptions, rig):
+def test_inputs_and_outputs(model_descriptions, reference, rig):
     md = model_descriptions[rig]
-    inputs = [v.name for v in md.modelVariables if v.causality == "input"]
-    outputs = [v.name for v in md.modelVariables if v.causality == "output"]
-    assert inputs == list(INPUTS)
-    assert outputs == list(OUTPUTS)
+    inputs = [v for v in md.modelVariables if v.causality == "input"]
+    outputs = [v for v in md.modelVariables if v.causality == "output"]
+    assert [v.name for v in inputs] == list(INPUTS)
+    assert [v.name for v in outputs] == list(OUTPUTS)
+    # names, units and descriptions are those of the one table (gearsim/fields.h,
+    # read here from the library's gs_rig_input_info / gs_rig_output_info)
+    for variables, which, prefix in ((inputs, "input", INPUT_PREFIX), (outputs, "output", "")):
+        table = reference.field_table(which)
+        assert [v.name for v in variables] == [prefix + f["name"] for f in table]
+        for v, f in zip(variables, table, strict=True):
+            assert v.unit == fmi_unit(f[f"{rig}_unit"]), v.name
+            assert v.description == f["doc"], v.name
+            assert v.type == "Real" and v.variability == "continuous"
     assert [md.modelVariables.index(u.variable) for u in md.outputs] == [
         i for i, v in enumerate(md.modelVariables) if v.causality == "output"
     ]
@@ -172,9 +189,9 @@ def _scenarios():
                 "efficiency_matrix[2,3]": 0.93,
             },
             inputs=lambda t: {
-                "drive_speed": 20.0 * np.sin(two_pi * 2.0 * t) + 5.0 * t,
-                "load": np.where(t < 0.2, 0.0, 2.0),
-                "ambient_temperature": 293.15 + 10.0 * t,
+                "inputs.base_speed": 20.0 * np.sin(two_pi * 2.0 * t) + 5.0 * t,
+                "inputs.load": np.where(t < 0.2, 0.0, 2.0),
+                "inputs.ambient_temperature": 293.15 + 10.0 * t,
             },
         ),
         "gear_torque_backlash_measured_T": dict(
@@ -196,9 +213,9 @@ def _scenarios():
                 "output_shaft_rotates": 0,
             },
             inputs=lambda t: {
-                "motor_torque": 2.0 * np.sin(two_pi * 3.0 * t),
-                "load": np.full_like(t, -0.5),
-                "measured_temperature": 290.0 + 80.0 * t,
+                "inputs.base_torque": 2.0 * np.sin(two_pi * 3.0 * t),
+                "inputs.load": np.full_like(t, -0.5),
+                "inputs.measured_temperature": 290.0 + 80.0 * t,
             },
         ),
         "rack_speed_backlash": dict(
@@ -219,8 +236,8 @@ def _scenarios():
                 "stiffness": 2e5,
             },
             inputs=lambda t: {
-                "drive_speed": 10.0 * np.sin(two_pi * 1.5 * t),
-                "load": 20.0 * np.cos(two_pi * 4.0 * t),
+                "inputs.base_speed": 10.0 * np.sin(two_pi * 1.5 * t),
+                "inputs.load": 20.0 * np.cos(two_pi * 4.0 * t),
             },
         ),
         "rack_torque_tooth_table": dict(
@@ -250,9 +267,9 @@ def _scenarios():
                 "rack_mass": 1.5,
             },
             inputs=lambda t: {
-                "motor_torque": np.where(t < 0.1, 1.0, -0.5),
-                "load": np.full_like(t, 4.0),
-                "ambient_temperature": np.full_like(t, 300.0),
+                "inputs.base_torque": np.where(t < 0.1, 1.0, -0.5),
+                "inputs.load": np.full_like(t, 4.0),
+                "inputs.ambient_temperature": np.full_like(t, 300.0),
             },
         ),
     }
@@ -264,7 +281,7 @@ SCENARIOS = _scenarios()
 def _signals(inputs: dict[str, np.ndarray], t: np.ndarray) -> np.ndarray:
     signals = np.zeros(len(t), dtype=[("time", np.float64)] + [(k, np.float64) for k in INPUTS])
     signals["time"] = t
-    defaults = {"ambient_temperature": 293.15, "measured_temperature": 300.0}
+    defaults = {"inputs.ambient_temperature": 293.15, "inputs.measured_temperature": 300.0}
     for name in INPUTS:
         signals[name] = inputs.get(name, np.full_like(t, defaults.get(name, 0.0)))
     return signals
@@ -307,11 +324,11 @@ def test_simulate_fmu_matches_direct_c_run(unzipped, reference, name):
     # outputs at t = 0: initial state
     first = result[0]
     if sc["start"].get("base_drive", 0) == 0:
-        assert first["base_speed"] == signals["drive_speed"][0]
+        assert first["base_speed"] == signals["inputs.base_speed"][0]
     else:
         assert first["base_speed"] == sc["start"].get("initial_base_speed", 0.0)
     if sc["start"].get("temperature_input"):
-        assert first["temperature"] == signals["measured_temperature"][0]
+        assert first["temperature"] == signals["inputs.measured_temperature"][0]
     else:
         assert first["temperature"] == 300.0
 
@@ -399,7 +416,7 @@ def test_reset_restores_start_values_and_start_time_is_kept(instance):
     def run(inst):
         rows = []
         for k in range(30):
-            inst.set({"drive_speed": 3.0 + k, "load": 0.2})
+            inst.set({"inputs.base_speed": 3.0 + k, "inputs.load": 0.2})
             inst.step(2e-3)
             rows.append(inst.get(list(OUTPUTS)))
         return np.array(rows)
@@ -450,8 +467,8 @@ def _drive(inst: object, steps: int, k0: int, h: float = 2e-3) -> np.ndarray:
         t = k * h
         inst.set(
             {
-                "motor_torque": 3.0 * math.sin(2 * math.pi * 4.0 * t),
-                "load": -0.3 + 0.1 * math.cos(9.0 * t),
+                "inputs.base_torque": 3.0 * math.sin(2 * math.pi * 4.0 * t),
+                "inputs.load": -0.3 + 0.1 * math.cos(9.0 * t),
             }
         )
         inst.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
@@ -533,12 +550,12 @@ def test_tunable_load_offset_matches_shifted_load_in_c(instance, reference):
     for i in range(n):
         if i == k:
             inst.set({"load_offset": delta})
-        inst.set({"drive_speed": speed[i], "load": 0.5})
+        inst.set({"inputs.base_speed": speed[i], "inputs.load": 0.5})
         inst.step(h)
         rows.append(inst.get(list(OUTPUTS)))
     fmu_out = np.array(rows)
     load = np.where(np.arange(n) < k, 0.5, 0.5 + delta)
-    direct = reference.run("gear", start, {"drive_speed": speed, "load": load}, 1)
+    direct = reference.run("gear", start, {"inputs.base_speed": speed, "inputs.load": load}, 1)
     ref_out = np.column_stack([direct[o] for o in OUTPUTS])
     assert fmu_out.tobytes() == ref_out.tobytes()
     MAX_DIFFS["tunable_load_offset"] = float(np.max(np.abs(fmu_out - ref_out)))
