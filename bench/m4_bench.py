@@ -58,35 +58,38 @@ PROGRAMS = {
     EMPTY: "",
     "Simple Gear block": """
         gs_simple_gear_params p = gs_simple_gear_params_default();
-        static gs_simple_gear b; gs_gear_ports_in in = {0}; gs_gear_ports_out out;
-        if (gs_simple_gear_init(&b, &p, 0) != GS_OK) return 1;
-        gs_simple_gear_step(&b, 1e-3f, &in, &out); return (int)out.base_torque_Nm;""",
+        static gs_simple_gear_consts c; static gs_block_state st;
+        gs_gear_ports_in in = {0}; gs_gear_ports_out out;
+        if (gs_simple_gear_init(&c, &st, &p, 0) != GS_OK) return 1;
+        gs_simple_gear_step(&c, &st, 1e-3f, &in, &out); return (int)out.base_torque_Nm;""",
     "Rack & Pinion block": """
         gs_rack_pinion_params p = gs_rack_pinion_params_default();
-        static gs_rack_pinion b; gs_rack_ports_in in = {0}; gs_rack_ports_out out;
-        if (gs_rack_pinion_init(&b, &p, 0) != GS_OK) return 1;
-        gs_rack_pinion_step(&b, 1e-3f, &in, &out); return (int)out.pinion_torque_Nm;""",
+        static gs_rack_pinion_consts c; static gs_block_state st;
+        gs_rack_ports_in in = {0}; gs_rack_ports_out out;
+        if (gs_rack_pinion_init(&c, &st, &p, 0) != GS_OK) return 1;
+        gs_rack_pinion_step(&c, &st, 1e-3f, &in, &out); return (int)out.pinion_torque_Nm;""",
     "Simple Gear rig": """
         gs_simple_gear_params p = gs_simple_gear_params_default();
         gs_rig_params r = gs_rig_params_default();
-        static gs_rig rig; gs_rig_input in = {0}; gs_rig_output out;
-        if (gs_rig_init_gear(&rig, &p, &r, 0) != GS_OK) return 1;
-        gs_rig_step(&rig, &in, &out); return (int)out.base_torque_Nm;""",
+        static gs_rig_consts c; static gs_rig_state st; gs_rig_input in = {0}; gs_rig_output out;
+        if (gs_rig_init_gear(&c, &st, &p, &r, 0) != GS_OK) return 1;
+        gs_rig_step(&c, &st, &in, &out); return (int)out.base_torque;""",
     "Rack & Pinion rig": """
         gs_rack_pinion_params p = gs_rack_pinion_params_default();
         gs_rig_params r = gs_rig_params_default();
-        static gs_rig rig; gs_rig_input in = {0}; gs_rig_output out;
-        if (gs_rig_init_rack(&rig, &p, &r, 0) != GS_OK) return 1;
-        gs_rig_step(&rig, &in, &out); return (int)out.base_torque_Nm;""",
+        static gs_rig_consts c; static gs_rig_state st; gs_rig_input in = {0}; gs_rig_output out;
+        if (gs_rig_init_rack(&c, &st, &p, &r, 0) != GS_OK) return 1;
+        gs_rig_step(&c, &st, &in, &out); return (int)out.base_torque;""",
     "both rigs + gs_status_str": """
         gs_simple_gear_params p = gs_simple_gear_params_default();
         gs_rack_pinion_params q = gs_rack_pinion_params_default();
         gs_rig_params r = gs_rig_params_default();
-        static gs_rig a, b; gs_rig_input in = {0}; gs_rig_output out;
-        gs_status s = gs_rig_init_gear(&a, &p, &r, 0);
-        if (s == GS_OK) s = gs_rig_init_rack(&b, &q, &r, 0);
+        static gs_rig_consts ca, cb; static gs_rig_state sa, sb;
+        gs_rig_input in = {0}; gs_rig_output out;
+        gs_status s = gs_rig_init_gear(&ca, &sa, &p, &r, 0);
+        if (s == GS_OK) s = gs_rig_init_rack(&cb, &sb, &q, &r, 0);
         if (s != GS_OK) return (int)gs_status_str(s)[0];
-        gs_rig_step(&a, &in, &out); gs_rig_step(&b, &in, &out); return (int)out.base_torque_Nm;""",
+        gs_rig_step(&ca, &sa, &in, &out); gs_rig_step(&cb, &sb, &in, &out); return (int)out.base_torque;""",
 }
 
 MEM_FUNCS = """

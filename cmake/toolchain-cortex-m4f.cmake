@@ -1,7 +1,11 @@
 # CMake toolchain file: Cortex-M4F (ARMv7E-M + FPv4-SP), bare metal, arm-none-eabi-gcc.
 #
-#   cmake -S . -B build/m4f -DCMAKE_TOOLCHAIN_FILE=cmake/toolchain-cortex-m4f.cmake \
-#         -DGEARSIM_BUILD_SHARED=OFF -DGEARSIM_BUILD_EXAMPLES=OFF -DBUILD_TESTING=OFF
+#   cmake -S . -B build/m4f -DCMAKE_TOOLCHAIN_FILE=cmake/toolchain-cortex-m4f.cmake
+#   cmake --build build/m4f
+#
+# builds libgearsim.a alone: the root CMakeLists.txt turns the host-side
+# extras (shared library, examples, tests, benchmark) off when
+# CMAKE_CROSSCOMPILING is set.
 #
 # The FPU is single precision only, so this file turns GEARSIM_SINGLE_PRECISION
 # on (gs_real = float; a double build would run every operation through the

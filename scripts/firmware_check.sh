@@ -7,7 +7,8 @@
 #      stdio, exit/abort, libm, soft-float double helpers), exports only gs_*,
 #      has no .data/.bss, no double-precision instruction, and the size-probe
 #      programs link none of the forbidden routines;
-#   3. code and data size per model (size probes, from the link maps);
+#   3. code and data size per model (size probes, from the link maps), and the
+#      RAM of one instance: its state, apart from its constants;
 #   4. worst-case stack per public function (-fstack-usage + -fcallgraph-info);
 #   5. the scenario program under QEMU mps2-an386 (wrapped in timeout) against
 #      the host program: every output of every step bit for bit, and the
@@ -107,13 +108,18 @@ done
 
 section "3. code and data size per model (bytes, Cortex-M4F, from the link maps)"
 for opt in O2 Os; do
-  echo "-$opt  model           gearsim .text  .rodata  .data  .bss  | instance RAM (.bss of the probe)  | +newlib memcpy/memset"
+  echo "-$opt  model           gearsim .text  .rodata  .data  .bss  | probe .bss | RAM per instance: state | constants | +newlib memcpy/memset"
   python3 firmware/tools/map_sizes.py "$out/m4f-$opt"/probe_*.map | sort >"$out/sizes-$opt.txt"
   base_bss=$(awk '$1=="probe_baseline"{print $9}' "$out/sizes-$opt.txt")
   while read -r name text rodata data bss libc _otext _odata obss; do
     [ "$name" = probe_baseline ] && continue
-    printf '     %-15s %13d %8d %6d %5d  | %8d                          | %d\n' "${name#probe_}" \
-      "$text" "$rodata" "$data" "$bss" $((obss - base_bss)) "$libc"
+    # the probe's fw_state_* (what a step updates) and fw_consts_* (what init
+    # derives, read-only afterwards: in .bss here, or flash as an image)
+    read -r state consts < <(arm-none-eabi-nm -S --radix=d "$out/m4f-$opt/$name.elf" |
+      awk 'NF==4 && $4 ~ /^fw_state_/ {s += $2} NF==4 && $4 ~ /^fw_consts_/ {c += $2}
+           END {print s + 0, c + 0}')
+    printf '     %-15s %13d %8d %6d %5d  | %10d | %23d | %9d | %d\n' "${name#probe_}" \
+      "$text" "$rodata" "$data" "$bss" $((obss - base_bss)) "$state" "$consts" "$libc"
     [ "$data" = 0 ] && [ "$bss" = 0 ] || fail "-$opt: ${name#probe_} takes .data/.bss in the library"
   done <"$out/sizes-$opt.txt"
   echo "     per source file (arm-none-eabi-size, text = code + constants):"

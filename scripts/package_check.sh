@@ -1,18 +1,50 @@
 #!/usr/bin/env bash
-# Installs the library into a scratch prefix and builds a consumer twice:
-# with find_package(gearsim) (CMake package) and with pkg-config.
+# The ways a user builds against gearsim, each with tests/package/main.c
+# (prints gs_version(), steps a gear rig, checks the torque):
+#   1. installed into a scratch prefix, found with find_package(gearsim);
+#   2. the same install through pkg-config;
+#   3. embedded with add_subdirectory() (tests/package/subproject), configured
+#      with cmocka hidden: a parent project needs none of the test tools and
+#      gets only the static library;
+#   4. at top level with cmocka hidden, configuring fails and says how to fix
+#      it (install libcmocka-dev, or BUILD_TESTING=OFF).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${PACKAGE_BUILD_DIR:-build/package}
+jobs=$(nproc 2>/dev/null || echo 2)
 rm -rf "$out"
-cmake -S . -B "$out/lib" -DBUILD_TESTING=OFF -DGEARSIM_BUILD_EXAMPLES=OFF -DCMAKE_INSTALL_PREFIX="$PWD/$out/prefix" >/dev/null
-cmake --build "$out/lib" -j "$(nproc 2>/dev/null || echo 2)" >/dev/null
+mkdir -p "$out/no-pkgconfig"
+cmake -S . -B "$out/lib" -DBUILD_TESTING=OFF -DGEARSIM_BUILD_EXAMPLES=OFF -DGEARSIM_BUILD_BENCH=OFF \
+  -DCMAKE_INSTALL_PREFIX="$PWD/$out/prefix" >/dev/null
+cmake --build "$out/lib" -j "$jobs" >/dev/null
 cmake --install "$out/lib" >/dev/null
 cmake -S tests/package -B "$out/consumer" -DCMAKE_PREFIX_PATH="$PWD/$out/prefix" >/dev/null
 cmake --build "$out/consumer" >/dev/null
 "$out/consumer/app"
-export PKG_CONFIG_PATH="$PWD/$out/prefix/lib/pkgconfig"
+echo "package_check: find_package(gearsim) consumer ok"
+
 # shellcheck disable=SC2046
-cc tests/package/main.c $(pkg-config --cflags gearsim) $(pkg-config --libs --static gearsim) -o "$out/app-pkgconfig"
+PKG_CONFIG_PATH="$PWD/$out/prefix/lib/pkgconfig" \
+  cc tests/package/main.c $(PKG_CONFIG_PATH="$PWD/$out/prefix/lib/pkgconfig" pkg-config --cflags gearsim) \
+  $(PKG_CONFIG_PATH="$PWD/$out/prefix/lib/pkgconfig" pkg-config --libs --static gearsim) -o "$out/app-pkgconfig"
 LD_LIBRARY_PATH="$PWD/$out/prefix/lib" "$out/app-pkgconfig"
-echo "package_check: find_package(gearsim) and pkg-config consumers ok"
+echo "package_check: pkg-config consumer ok"
+
+# cmocka hidden both ways it could be found: no .pc file visible to
+# pkg-config, and the CMake package lookup disabled.
+PKG_CONFIG_LIBDIR="$PWD/$out/no-pkgconfig" PKG_CONFIG_PATH="" \
+  cmake -S tests/package/subproject -B "$out/subproject" -DCMAKE_DISABLE_FIND_PACKAGE_cmocka=ON \
+  >"$out/subproject.log" 2>&1 || { cat "$out/subproject.log"; echo "package_check: subproject configure failed"; exit 1; }
+cmake --build "$out/subproject" -j "$jobs" >/dev/null
+"$out/subproject/app"
+ctest --test-dir "$out/subproject" --output-on-failure >/dev/null
+echo "package_check: add_subdirectory() consumer ok (configured without cmocka; static library only)"
+
+if PKG_CONFIG_LIBDIR="$PWD/$out/no-pkgconfig" PKG_CONFIG_PATH="" \
+   cmake -S . -B "$out/no-cmocka" -DCMAKE_DISABLE_FIND_PACKAGE_cmocka=ON >"$out/no-cmocka.log" 2>&1; then
+  echo "package_check: top-level configure without cmocka succeeded with the tests on"; exit 1
+elif ! grep -q "libcmocka-dev" "$out/no-cmocka.log" || ! grep -q "BUILD_TESTING=OFF" "$out/no-cmocka.log"; then
+  cat "$out/no-cmocka.log"; echo "package_check: no clear message without cmocka"; exit 1
+fi
+echo "package_check: top-level configure without cmocka stops, saying to install libcmocka-dev or set BUILD_TESTING=OFF"
+echo "package_check: find_package(gearsim), pkg-config and add_subdirectory() consumers ok"

@@ -1,0 +1,35 @@
+# gearsim_read_version(<header> <prefix>): reads GS_VERSION_MAJOR/MINOR/PATCH
+# and GS_VERSION_STRING from include/gearsim/version.h, the one place the
+# version is written, and sets <prefix> ("MAJOR.MINOR.PATCH"),
+# <prefix>_MAJOR/_MINOR/_PATCH and <prefix>_STRING in the caller's scope.
+# Usable before project() (the root and fmu/ call it to set VERSION).
+# Re-configures when the header changes. tests: cmake/check_version.cmake.
+function(gearsim_read_version header prefix)
+  if(NOT EXISTS "${header}")
+    message(FATAL_ERROR "gearsim: version header ${header} not found")
+  endif()
+  file(STRINGS "${header}" _lines REGEX "^#define[ \t]+GS_VERSION_(MAJOR|MINOR|PATCH|STRING)[ \t]")
+  foreach(_part MAJOR MINOR PATCH)
+    set(_value "")
+    foreach(_line IN LISTS _lines)
+      if(_line MATCHES "^#define[ \t]+GS_VERSION_${_part}[ \t]+([0-9]+)[ \t]*$")
+        set(_value "${CMAKE_MATCH_1}")
+      endif()
+    endforeach()
+    if(_value STREQUAL "")
+      message(FATAL_ERROR "gearsim: GS_VERSION_${_part} (a number) not found in ${header}")
+    endif()
+    set(${prefix}_${_part} "${_value}" PARENT_SCOPE)
+    list(APPEND _numbers "${_value}")
+  endforeach()
+  set(_string "")
+  foreach(_line IN LISTS _lines)
+    if(_line MATCHES "^#define[ \t]+GS_VERSION_STRING[ \t]+\"([^\"]*)\"")
+      set(_string "${CMAKE_MATCH_1}")
+    endif()
+  endforeach()
+  list(JOIN _numbers "." _version)
+  set(${prefix} "${_version}" PARENT_SCOPE)
+  set(${prefix}_STRING "${_string}" PARENT_SCOPE)
+  set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS "${header}")
+endfunction()
