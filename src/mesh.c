@@ -48,7 +48,7 @@ gs_status gs_mesh_set_backlash(gs_mesh_ *m, const gs_backlash_params *p, gs_real
             return s;
         }
     }
-    m->hard_stop = (int)p->hard_stop_model;
+    m->hard_stop = p->hard_stop_model;
     m->half_gap = half_gap;
     m->inv_transition = p->hard_stop_model == GS_HARD_STOP_SMOOTH ? GS_R(1.0) / p->transition_region_m
                                                                   : GS_R(0.0);

@@ -10,10 +10,7 @@
 #include "gearsim/types.h"
 
 /* ---- Internal constants: what init derives and the step only reads. The
- * state lives in the public gs_block_state. Plain data, no pointers. Options
- * are stored as int, not as their enum types: the size of an enum depends on
- * the ABI (arm-none-eabi packs them into one byte), and the published size of
- * the opaque constants must hold on every target. */
+ * state lives in the public gs_block_state. Plain data, no pointers. */
 typedef struct {
     gs_real x[GS_TABLE_MAX];
     gs_real y[GS_TABLE_MAX];
@@ -38,8 +35,8 @@ typedef struct {
     gs_real direction;          /* s or s_R, +1 or -1 */
     gs_real mu_base;            /* viscous, N*m/(rad/s) */
     gs_real mu_follower;        /* viscous, N*m/(rad/s) or N/(m/s) */
-    int friction;               /* gs_friction_model */
-    int smoothing;              /* gs_loss_smoothing */
+    gs_friction_model friction;
+    gs_loss_smoothing smoothing;
     gs_real eta;                /* constant efficiency */
     gs_real power_threshold;    /* W */
     gs_real inv_power_threshold;
@@ -52,7 +49,7 @@ typedef struct {
     gs_real initial_temperature;/* K */
     /* backlash */
     int backlash;
-    int hard_stop;              /* gs_hard_stop_model */
+    gs_hard_stop_model hard_stop;
     gs_real half_gap;           /* b/2, m */
     gs_real inv_transition;     /* 1/d */
     gs_real stiffness;
@@ -87,7 +84,10 @@ typedef struct {
 } gs_contact_step_;
 
 /* The public opaque blocks are views of these internal types: a compile-time
- * check that the published sizes are exact (C99: a negative array size). */
+ * check that the published sizes hold them (C99: a negative array size). The
+ * published sizes are those of the x86-64 and AAPCS hosts; where enums are
+ * packed into one byte (arm-none-eabi) the internal type is a few bytes
+ * smaller. */
 #define GS_STATIC_ASSERT_(name, cond) typedef char gs_static_assert_##name[(cond) ? 1 : -1]
 
 /* Mesh-loss quantities that depend only on the temperature, evaluated once

@@ -13,7 +13,7 @@
 void gs_mesh_loss_prepare(const gs_mesh_ *m, gs_real temperature, gs_loss_ctx_ *ctx)
 {
     gs_real eta = m->eta;
-    switch ((gs_friction_model)m->friction) {
+    switch (m->friction) {
     case GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY:
         eta = gs_interp1(m->table.eta_of_T.x, m->table.eta_of_T.y, m->table.eta_of_T.n, temperature);
         break;
@@ -73,7 +73,7 @@ static gs_real coulomb_slope(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real
 
 gs_real gs_mesh_loss_torque(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T, gs_real w)
 {
-    switch ((gs_friction_model)m->friction) {
+    switch (m->friction) {
     case GS_FRICTION_NONE:
         return GS_R(0.0);
     case GS_FRICTION_CONSTANT_EFFICIENCY:
@@ -100,7 +100,7 @@ static gs_real tooth_loss_factor(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_
 gs_real gs_mesh_loss_from_tooth(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real t_f0, gs_real w,
                                 gs_real load_estimate)
 {
-    switch ((gs_friction_model)m->friction) {
+    switch (m->friction) {
     case GS_FRICTION_NONE:
         return GS_R(0.0);
     case GS_FRICTION_CONSTANT_EFFICIENCY:
@@ -134,7 +134,7 @@ void gs_mesh_loss_linearize(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real 
 {
     *m0 = GS_R(0.0);
     *m1 = GS_R(0.0);
-    switch ((gs_friction_model)m->friction) {
+    switch (m->friction) {
     case GS_FRICTION_NONE:
         break;
     case GS_FRICTION_CONSTANT_EFFICIENCY:

@@ -117,8 +117,8 @@ gs_status gs_rack_pinion_mesh(gs_mesh_ *mesh, const gs_rack_pinion_params *p, gs
     m.direction = direction;
     m.mu_base = p->pinion_viscous_coefficient;
     m.mu_follower = p->rack_viscous_coefficient;
-    m.friction = (int)p->friction_model;
-    m.smoothing = (int)p->loss_smoothing;
+    m.friction = p->friction_model;
+    m.smoothing = p->loss_smoothing;
     m.eta = p->friction_model == GS_FRICTION_CONSTANT_EFFICIENCY ? p->efficiency_const : GS_R(1.0);
     m.power_threshold = p->power_threshold_W;
     m.inv_power_threshold = GS_R(1.0) / p->power_threshold_W;
@@ -136,10 +136,10 @@ gs_status gs_rack_pinion_mesh(gs_mesh_ *mesh, const gs_rack_pinion_params *p, gs
     return GS_OK;
 }
 
-GS_STATIC_ASSERT_(rack_pinion_consts_size, sizeof(gs_rack_pinion_consts) == sizeof(gs_mesh_));
+GS_STATIC_ASSERT_(rack_pinion_consts_size, sizeof(gs_rack_pinion_consts) >= sizeof(gs_mesh_));
 
 /* The opaque public block is a view of the internal constants. */
-static const gs_mesh_ *consts_mesh(const gs_rack_pinion_consts *consts)
+static const gs_mesh_ *rack_mesh(const gs_rack_pinion_consts *consts)
 {
     return (const gs_mesh_ *)(const void *)consts;
 }
@@ -160,7 +160,7 @@ gs_status gs_rack_pinion_init(gs_rack_pinion_consts *consts, gs_block_state *sta
 
 void gs_rack_pinion_reset(const gs_rack_pinion_consts *consts, gs_block_state *state)
 {
-    gs_mesh_reset(consts_mesh(consts), state);
+    gs_mesh_reset(rack_mesh(consts), state);
 }
 
 void gs_rack_pinion_step(const gs_rack_pinion_consts *consts, gs_block_state *state, gs_real dt_s,
@@ -169,7 +169,7 @@ void gs_rack_pinion_step(const gs_rack_pinion_consts *consts, gs_block_state *st
     const gs_mesh_in_ mi = {in->pinion_speed_rad_s, in->rack_velocity_m_s, in->rack_force_N,
                             in->heat_flow_W, in->temperature_K, in->use_temperature_input};
     gs_mesh_out_ mo;
-    gs_mesh_block_step(consts_mesh(consts), state, dt_s, &mi, &mo);
+    gs_mesh_block_step(rack_mesh(consts), state, dt_s, &mi, &mo);
     out->pinion_torque_Nm = mo.base_torque;
     out->rack_force_N = mo.follower_torque;
     out->rack_velocity_m_s = mo.follower_speed;

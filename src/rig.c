@@ -30,9 +30,9 @@
  * it. The step reads it and writes the public gs_rig_state. */
 typedef struct {
     gs_mesh_ mesh;
-    int block;                     /* gs_rig_block (options as int: mesh.h) */
-    int base_drive;                /* gs_base_drive */
-    int temperature_source;        /* gs_temperature_source */
+    gs_rig_block block;
+    gs_base_drive base_drive;
+    gs_temperature_source temperature_source;
     int heat_path;
     int substeps;
     int substeps_capped;           /* 1: the automatic count stopped at GS_AUTO_SUBSTEPS_MAX */
@@ -56,7 +56,7 @@ typedef struct {
                                       (torque-driven base: the base inertia alone) */
 } rig_consts_;
 
-GS_STATIC_ASSERT_(rig_consts_size, sizeof(gs_rig_consts) == sizeof(rig_consts_));
+GS_STATIC_ASSERT_(rig_consts_size, sizeof(gs_rig_consts) >= sizeof(rig_consts_));
 
 /* The opaque public constants are a view of rig_consts_. */
 static const rig_consts_ *consts_of(const gs_rig_consts *consts)
@@ -188,9 +188,9 @@ static gs_real contact_h_omega_n(const rig_consts_ *r, gs_real h, gs_real inv_ma
  * checked by check_rig. Writes in place: no second rig on the stack. */
 static void rig_fill(rig_consts_ *r, gs_rig_block block, const gs_rig_params *p)
 {
-    r->block = (int)block;
+    r->block = block;
     r->dt = p->dt_s;
-    r->base_drive = (int)p->base_drive;
+    r->base_drive = p->base_drive;
     r->base_inertia = p->base_inertia_kg_m2;
     r->initial_base_speed = p->initial_base_speed_rad_s;
     r->driven_inertia = p->driven_inertia;
@@ -199,7 +199,7 @@ static void rig_fill(rig_consts_ *r, gs_rig_block block, const gs_rig_params *p)
     r->load_offset = p->load_offset;
     r->heat_path = p->heat_path ? 1 : 0;
     r->inv_thermal_resistance = r->heat_path ? GS_R(1.0) / p->thermal_resistance_K_W : GS_R(0.0);
-    r->temperature_source = (int)p->temperature_source;
+    r->temperature_source = p->temperature_source;
     r->accel_gain = p->dt_s / (p->accel_filter_time_constant_s + p->dt_s);
     r->substeps = 1;
     r->substeps_capped = 0;
@@ -623,7 +623,7 @@ void gs_rig_run(const gs_rig_consts *consts, gs_rig_state *state, size_t n, cons
 #define GS_OUTPUT_INFO_(type, name, gear_unit, rack_unit, doc) \
     {#name, gear_unit, rack_unit, doc, offsetof(gs_rig_output, name), GS_IS_INT_##type},
 #define GS_BLOCK_STATE_INFO_(type, name, gear_unit, rack_unit, doc) \
-    {#name, gear_unit, rack_unit, doc, offsetof(gs_rig_state, block) + offsetof(gs_block_state, name), GS_IS_INT_##type},
+    {#name, gear_unit, rack_unit, doc, offsetof(gs_rig_state, block.name), GS_IS_INT_##type},
 #define GS_RIG_STATE_INFO_(type, name, gear_unit, rack_unit, doc) \
     {#name, gear_unit, rack_unit, doc, offsetof(gs_rig_state, name), GS_IS_INT_##type},
 

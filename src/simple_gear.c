@@ -160,8 +160,8 @@ gs_status gs_simple_gear_mesh(gs_mesh_ *mesh, const gs_simple_gear_params *p, gs
     m.direction = direction;
     m.mu_base = p->viscous_coefficients[0];
     m.mu_follower = p->viscous_coefficients[1];
-    m.friction = (int)p->friction_model;
-    m.smoothing = (int)p->loss_smoothing;
+    m.friction = p->friction_model;
+    m.smoothing = p->loss_smoothing;
     m.eta = p->friction_model == GS_FRICTION_CONSTANT_EFFICIENCY ? p->efficiency_const : GS_R(1.0);
     m.power_threshold = p->power_threshold_W;
     m.inv_power_threshold = p->power_threshold_W > GS_R(0.0) ? GS_R(1.0) / p->power_threshold_W : GS_R(0.0);
@@ -208,10 +208,10 @@ gs_status gs_simple_gear_mesh(gs_mesh_ *mesh, const gs_simple_gear_params *p, gs
     return GS_OK;
 }
 
-GS_STATIC_ASSERT_(simple_gear_consts_size, sizeof(gs_simple_gear_consts) == sizeof(gs_mesh_));
+GS_STATIC_ASSERT_(simple_gear_consts_size, sizeof(gs_simple_gear_consts) >= sizeof(gs_mesh_));
 
 /* The opaque public block is a view of the internal constants. */
-static const gs_mesh_ *consts_mesh(const gs_simple_gear_consts *consts)
+static const gs_mesh_ *gear_mesh(const gs_simple_gear_consts *consts)
 {
     return (const gs_mesh_ *)(const void *)consts;
 }
@@ -232,7 +232,7 @@ gs_status gs_simple_gear_init(gs_simple_gear_consts *consts, gs_block_state *sta
 
 void gs_simple_gear_reset(const gs_simple_gear_consts *consts, gs_block_state *state)
 {
-    gs_mesh_reset(consts_mesh(consts), state);
+    gs_mesh_reset(gear_mesh(consts), state);
 }
 
 void gs_simple_gear_step(const gs_simple_gear_consts *consts, gs_block_state *state, gs_real dt_s,
@@ -241,7 +241,7 @@ void gs_simple_gear_step(const gs_simple_gear_consts *consts, gs_block_state *st
     const gs_mesh_in_ mi = {in->base_speed_rad_s, in->follower_speed_rad_s, in->follower_torque_Nm,
                             in->heat_flow_W, in->temperature_K, in->use_temperature_input};
     gs_mesh_out_ mo;
-    gs_mesh_block_step(consts_mesh(consts), state, dt_s, &mi, &mo);
+    gs_mesh_block_step(gear_mesh(consts), state, dt_s, &mi, &mo);
     out->base_torque_Nm = mo.base_torque;
     out->follower_torque_Nm = mo.follower_torque;
     out->follower_speed_rad_s = mo.follower_speed;

@@ -102,14 +102,15 @@ enum {
 /* The field tables, in member order: GS_RIG_INPUT_FIELDS, GS_RIG_OUTPUT_FIELDS
  * and GS_RIG_STATE_FIELDS entries (the state's offsets are within
  * gs_rig_state, block members first). */
-GS_API extern const gs_field_info gs_rig_input_info[];
-GS_API extern const gs_field_info gs_rig_output_info[];
-GS_API extern const gs_field_info gs_rig_state_info[];
+GS_API extern const gs_field_info gs_rig_input_info[GS_RIG_INPUT_FIELDS];
+GS_API extern const gs_field_info gs_rig_output_info[GS_RIG_OUTPUT_FIELDS];
+GS_API extern const gs_field_info gs_rig_state_info[GS_RIG_STATE_FIELDS];
 
 /* What init derives from the parameters (opaque; the layout is internal). A
  * step only reads it: init once, then it may be const, shared by several
  * states, or kept in flash as an image of an initialised rig. Its size is
- * part of the ABI (GS_RIG_CONSTS_REALS reals). */
+ * part of the ABI (GS_RIG_CONSTS_REALS reals; on targets that pack enums the
+ * internal layout uses a few bytes less). */
 #ifdef GS_SINGLE_PRECISION
 #define GS_RIG_CONSTS_REALS 195
 #else
