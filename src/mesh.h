@@ -25,11 +25,10 @@ typedef struct {
     int ny;
 } gs_table2_;
 
-/* The mesh shared by both blocks: omega_B = ratio * omega_F, where ratio =
- * s*g (Simple Gear) or s_R/r_P (Rack & Pinion, follower = rack). */
+/* The mesh shared by both blocks: omega_F = inv_ratio * omega_B, where
+ * inv_ratio = s/g (Simple Gear) or s_R*r_P (Rack & Pinion, follower = rack). */
 typedef struct {
-    gs_real ratio;              /* omega_B / omega_F (signed) */
-    gs_real inv_ratio;          /* omega_F / omega_B */
+    gs_real inv_ratio;          /* omega_F / omega_B (signed) */
     gs_real base_radius;        /* r_B or r_P, m (backlash geometry) */
     gs_real follower_radius;    /* r_F (m) or 1 for the rack */
     gs_real direction;          /* s or s_R, +1 or -1 */
@@ -38,8 +37,7 @@ typedef struct {
     gs_friction_model friction;
     gs_loss_smoothing smoothing;
     gs_real eta;                /* constant efficiency */
-    gs_real power_threshold;    /* W */
-    gs_real inv_power_threshold;
+    gs_real inv_power_threshold;/* 1/p_th, 1/W */
     gs_real coulomb_idle;       /* g*tau_idle, follower-referred, N*m */
     gs_real load_slope;         /* k of eq. 2.5 */
     gs_real inv_speed_threshold;/* 1/omega_th */

@@ -112,7 +112,6 @@ gs_status gs_rack_pinion_mesh(gs_mesh_ *mesh, const gs_rack_pinion_params *p, gs
     }
     gs_mesh_ m;
     memset(&m, 0, sizeof m);
-    m.ratio = direction / radius;
     m.inv_ratio = direction * radius;
     m.direction = direction;
     m.mu_base = p->pinion_viscous_coefficient;
@@ -120,7 +119,6 @@ gs_status gs_rack_pinion_mesh(gs_mesh_ *mesh, const gs_rack_pinion_params *p, gs
     m.friction = p->friction_model;
     m.smoothing = p->loss_smoothing;
     m.eta = p->friction_model == GS_FRICTION_CONSTANT_EFFICIENCY ? p->efficiency_const : GS_R(1.0);
-    m.power_threshold = p->power_threshold_W;
     m.inv_power_threshold = GS_R(1.0) / p->power_threshold_W;
     m.base_load_scale = radius;
     if (p->friction_model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY) {

@@ -30,10 +30,8 @@
  * it. The step reads it and writes the public gs_rig_state. */
 typedef struct {
     gs_mesh_ mesh;
-    gs_rig_block block;
     gs_base_drive base_drive;
     gs_temperature_source temperature_source;
-    int heat_path;
     int substeps;
     int substeps_capped;           /* 1: the automatic count stopped at GS_AUTO_SUBSTEPS_MAX */
     gs_real dt;
@@ -45,7 +43,6 @@ typedef struct {
     gs_real load_offset;
     gs_real inv_thermal_resistance;
     gs_real accel_gain;            /* dt/(tau + dt) */
-    gs_real inv_eff_mass_contact;  /* 1/m_eff at the pitch line, 1/kg */
     gs_real substep;               /* h = dt/substeps, s */
     gs_real inv_substeps;          /* 1/substeps */
     gs_real inv_driven_inertia_sub;/* 1/(J_F + h*mu_F): the implicit viscous term */
@@ -186,9 +183,8 @@ static gs_real contact_h_omega_n(const rig_consts_ *r, gs_real h, gs_real inv_ma
 
 /* Fills the rig around an already validated mesh; the rig parameters were
  * checked by check_rig. Writes in place: no second rig on the stack. */
-static void rig_fill(rig_consts_ *r, gs_rig_block block, const gs_rig_params *p)
+static void rig_fill(rig_consts_ *r, const gs_rig_params *p)
 {
-    r->block = block;
     r->dt = p->dt_s;
     r->base_drive = p->base_drive;
     r->base_inertia = p->base_inertia_kg_m2;
@@ -197,8 +193,7 @@ static void rig_fill(rig_consts_ *r, gs_rig_block block, const gs_rig_params *p)
     r->load_coulomb = p->load_coulomb_friction;
     r->inv_load_speed_threshold = GS_R(1.0) / p->load_coulomb_speed_threshold;
     r->load_offset = p->load_offset;
-    r->heat_path = p->heat_path ? 1 : 0;
-    r->inv_thermal_resistance = r->heat_path ? GS_R(1.0) / p->thermal_resistance_K_W : GS_R(0.0);
+    r->inv_thermal_resistance = p->heat_path ? GS_R(1.0) / p->thermal_resistance_K_W : GS_R(0.0);
     r->temperature_source = p->temperature_source;
     r->accel_gain = p->dt_s / (p->accel_filter_time_constant_s + p->dt_s);
     r->substeps = 1;
@@ -214,17 +209,16 @@ static void rig_fill(rig_consts_ *r, gs_rig_block block, const gs_rig_params *p)
     r->inv_base_inertia_sub = r->base_drive == GS_BASE_TORQUE_DRIVEN
                                   ? GS_R(1.0) / (r->base_inertia + r->substep * r->mesh.mu_base)
                                   : GS_R(0.0);
-    r->inv_eff_mass_contact = GS_R(0.0);
     memset(&r->contact, 0, sizeof r->contact);
     memset(&r->contact_stuck, 0, sizeof r->contact_stuck);
     if (r->mesh.backlash) {
-        r->inv_eff_mass_contact = contact_inverse_mass(r, r->substep);
-        gs_contact_prepare(&r->mesh, r->substep, r->inv_eff_mass_contact, &r->contact);
+        const gs_real inv_eff_mass = contact_inverse_mass(r, r->substep); /* 1/m_eff at the pitch line, 1/kg */
+        gs_contact_prepare(&r->mesh, r->substep, inv_eff_mass, &r->contact);
         if (r->base_drive == GS_BASE_TORQUE_DRIVEN) {
             gs_contact_prepare(&r->mesh, r->substep,
                                base_inverse_mass(r, r->substep), &r->contact_stuck);
         }
-        r->contact_h_omega_n = contact_h_omega_n(r, r->substep, r->inv_eff_mass_contact);
+        r->contact_h_omega_n = contact_h_omega_n(r, r->substep, inv_eff_mass);
         r->substeps_capped = p->contact_substeps == 0 && r->contact_h_omega_n > GS_R(0.5);
     }
 }
@@ -243,7 +237,7 @@ gs_status gs_rig_init_gear(gs_rig_consts *consts, gs_rig_state *state,
     rig_consts_ *r = (rig_consts_ *)(void *)consts;
     gs_status s = check_rig(params, GS_RIG_SIMPLE_GEAR, err);
     if (s == GS_OK && (s = gs_simple_gear_mesh(&r->mesh, gear, err)) == GS_OK) {
-        rig_fill(r, GS_RIG_SIMPLE_GEAR, params);
+        rig_fill(r, params);
         gs_rig_reset(consts, state);
     }
     return s;
@@ -260,7 +254,7 @@ gs_status gs_rig_init_rack(gs_rig_consts *consts, gs_rig_state *state,
     rig_consts_ *r = (rig_consts_ *)(void *)consts;
     gs_status s = check_rig(params, GS_RIG_RACK_PINION, err);
     if (s == GS_OK && (s = gs_rack_pinion_mesh(&r->mesh, rack, err)) == GS_OK) {
-        rig_fill(r, GS_RIG_RACK_PINION, params);
+        rig_fill(r, params);
         gs_rig_reset(consts, state);
     }
     return s;

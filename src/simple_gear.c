@@ -155,7 +155,6 @@ gs_status gs_simple_gear_mesh(gs_mesh_ *mesh, const gs_simple_gear_params *p, gs
     gs_mesh_ m;
     memset(&m, 0, sizeof m);
     const gs_real g = p->teeth_ratio;
-    m.ratio = direction * g;
     m.inv_ratio = direction / g;
     m.direction = direction;
     m.mu_base = p->viscous_coefficients[0];
@@ -163,7 +162,6 @@ gs_status gs_simple_gear_mesh(gs_mesh_ *mesh, const gs_simple_gear_params *p, gs
     m.friction = p->friction_model;
     m.smoothing = p->loss_smoothing;
     m.eta = p->friction_model == GS_FRICTION_CONSTANT_EFFICIENCY ? p->efficiency_const : GS_R(1.0);
-    m.power_threshold = p->power_threshold_W;
     m.inv_power_threshold = p->power_threshold_W > GS_R(0.0) ? GS_R(1.0) / p->power_threshold_W : GS_R(0.0);
     m.base_load_scale = GS_R(1.0) / g;
     if (p->friction_model == GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY) {

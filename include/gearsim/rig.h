@@ -112,9 +112,9 @@ GS_API extern const gs_field_info gs_rig_state_info[GS_RIG_STATE_FIELDS];
  * part of the ABI (GS_RIG_CONSTS_REALS reals; on targets that pack enums the
  * internal layout uses a few bytes less). */
 #ifdef GS_SINGLE_PRECISION
-#define GS_RIG_CONSTS_REALS 195
+#define GS_RIG_CONSTS_REALS 190
 #else
-#define GS_RIG_CONSTS_REALS 188
+#define GS_RIG_CONSTS_REALS 184
 #endif
 typedef struct {
     gs_real opaque_[GS_RIG_CONSTS_REALS];

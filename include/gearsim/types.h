@@ -155,9 +155,9 @@ typedef struct {
  * const-qualified, copied, or placed in flash as an image of an initialised
  * block (same precision and target ABI). */
 #ifdef GS_SINGLE_PRECISION
-#define GS_BLOCK_CONSTS_REALS 152
+#define GS_BLOCK_CONSTS_REALS 150
 #else
-#define GS_BLOCK_CONSTS_REALS 148
+#define GS_BLOCK_CONSTS_REALS 146
 #endif
 
 #ifdef __cplusplus
