@@ -149,24 +149,12 @@ static inline int fz_int(uint8_t mode, const uint8_t payload[8])
     return (int)payload[0] - 4; /* -4 .. 251 */
 }
 
-/* The outputs of a rig step as an array, in the order of gearsim/fields.h,
- * and their names (for the checks' messages). */
-static inline void fz_rig_output_values(const gs_rig_output *o, gs_real v[GS_RIG_OUTPUT_FIELDS])
+/* The outputs of a rig step as an array of GS_RIG_OUTPUT_FIELDS reals (every
+ * member is a gs_real, gearsim/rig.h), in the order of gs_rig_output_info,
+ * which names them for the checks' messages. */
+static inline const gs_real *fz_rig_output_values(const gs_rig_output *o)
 {
-    int i = 0;
-#define FZ_OUTPUT_VALUE_(type, name, gear_unit, rack_unit, doc) v[i++] = o->name;
-    GS_RIG_OUTPUT_LIST(FZ_OUTPUT_VALUE_)
-#undef FZ_OUTPUT_VALUE_
-}
-
-static inline const char *fz_rig_output_name(int i)
-{
-    static const char *const names[GS_RIG_OUTPUT_FIELDS] = {
-#define FZ_OUTPUT_NAME_(type, name, gear_unit, rack_unit, doc) #name,
-        GS_RIG_OUTPUT_LIST(FZ_OUTPUT_NAME_)
-#undef FZ_OUTPUT_NAME_
-    };
-    return i >= 0 && i < GS_RIG_OUTPUT_FIELDS ? names[i] : "?";
+    return (const gs_real *)(const void *)o;
 }
 
 /* ---- parameter field tables: every field of the params structs, with its

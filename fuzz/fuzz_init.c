@@ -189,10 +189,9 @@ static void step_rig(const gs_rig_consts *consts, gs_rig_state *state, fz_reader
         in.measured_temperature = in_range(r, 1.0, 1e3);
         gs_rig_output o;
         gs_rig_step(consts, state, &in, &o);
-        gs_real v[GS_RIG_OUTPUT_FIELDS];
-        fz_rig_output_values(&o, v);
+        const gs_real *v = fz_rig_output_values(&o);
         for (int i = 0; i < GS_RIG_OUTPUT_FIELDS; ++i) {
-            FZ_CHECK(fz_finite(v[i]), "rig output field %d (%s) = %g at step %d", i, fz_rig_output_name(i),
+            FZ_CHECK(fz_finite(v[i]), "rig output field %d (%s) = %g at step %d", i, gs_rig_output_info[i].name,
                      (double)v[i], k);
         }
     }

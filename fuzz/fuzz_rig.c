@@ -316,14 +316,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         in->measured_temperature = input_value(&r, 1.0, 1e3);
         gs_rig_output *o = &outputs[k];
         gs_rig_step(&consts, &state, in, o);
-        gs_real v[GS_RIG_OUTPUT_FIELDS];
-        fz_rig_output_values(o, v);
+        const gs_real *v = fz_rig_output_values(o);
         if (fz_verbose()) {
             fprintf(stderr, "step %d in: w_B %.17g tau_m %.17g load %.17g T_amb %.17g T_meas %.17g\n  out:", k,
                     (double)in->base_speed, (double)in->base_torque, (double)in->load,
                     (double)in->ambient_temperature, (double)in->measured_temperature);
             for (int i = 0; i < GS_RIG_OUTPUT_FIELDS; ++i) {
-                fprintf(stderr, " %s %.9g", fz_rig_output_name(i), (double)v[i]);
+                fprintf(stderr, " %s %.9g", gs_rig_output_info[i].name, (double)v[i]);
             }
             fprintf(stderr, "\n");
         }
@@ -334,8 +333,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             continue;
         }
         for (int i = 0; i < GS_RIG_OUTPUT_FIELDS; ++i) {
-            FZ_CHECK(fz_finite(v[i]), "output field %d (%s) = %g at step %d (kappa %.3g)", i, fz_rig_output_name(i),
-                     (double)v[i], k, kappa);
+            FZ_CHECK(fz_finite(v[i]), "output field %d (%s) = %g at step %d (kappa %.3g)", i,
+                     gs_rig_output_info[i].name, (double)v[i], k, kappa);
         }
 
         const double port = (double)o->port_power;

@@ -23,10 +23,10 @@ cmake --build "$out/consumer" >/dev/null
 "$out/consumer/app"
 echo "package_check: find_package(gearsim) consumer ok"
 
+pc_path="$PWD/$out/prefix/lib/pkgconfig"
 # shellcheck disable=SC2046
-PKG_CONFIG_PATH="$PWD/$out/prefix/lib/pkgconfig" \
-  cc tests/package/main.c $(PKG_CONFIG_PATH="$PWD/$out/prefix/lib/pkgconfig" pkg-config --cflags gearsim) \
-  $(PKG_CONFIG_PATH="$PWD/$out/prefix/lib/pkgconfig" pkg-config --libs --static gearsim) -o "$out/app-pkgconfig"
+cc tests/package/main.c $(PKG_CONFIG_PATH="$pc_path" pkg-config --cflags --libs --static gearsim) \
+  -o "$out/app-pkgconfig"
 LD_LIBRARY_PATH="$PWD/$out/prefix/lib" "$out/app-pkgconfig"
 echo "package_check: pkg-config consumer ok"
 

@@ -228,19 +228,30 @@ static void report_parameter_error(const fmu *c, const fmu_data *d, const char *
 }
 
 /* Validates with->params through the rig init and derives their constants
- * into *consts; a refused value is logged and leaves *consts unchanged. The
- * initial state that init also fills is dropped: the running state is kept
- * (re-tuning is new constants stepping the old state). */
+ * into *consts; a refused value is logged and leaves *consts unchanged (the
+ * init leaves its outputs unchanged on failure, rig.h). The initial state
+ * that init also fills is dropped: the running state is kept (re-tuning is
+ * new constants stepping the old state). */
 static int derive_consts(const fmu *c, const fmu_data *with, gs_rig_consts *consts, const char *function)
 {
-    gs_rig_consts fresh;
     gs_rig_state initial;
     gs_error err;
-    if (gs_fmu_init_rig(THIS_RIG, &with->params, &fresh, &initial, &err) != GS_OK) {
+    if (gs_fmu_init_rig(THIS_RIG, &with->params, consts, &initial, &err) != GS_OK) {
         report_parameter_error(c, with, function, &err);
         return 0;
     }
-    *consts = fresh;
+    return 1;
+}
+
+/* Makes the constants of with->params the ones in use (derive_consts into
+ * c->consts); a refused value leaves them unchanged. */
+static int apply_consts(fmu *c, const fmu_data *with, const char *function)
+{
+    if (!derive_consts(c, with, &c->consts, function)) {
+        return 0;
+    }
+    c->consts_params = with->params;
+    c->consts_ready = 1;
     return 1;
 }
 
@@ -252,12 +263,7 @@ static int sync_consts(fmu *c, const char *function)
         (c->consts_ready && memcmp(&c->consts_params, &c->d.params, sizeof c->consts_params) == 0)) {
         return 1;
     }
-    if (!derive_consts(c, &c->d, &c->consts, function)) {
-        return 0;
-    }
-    c->consts_params = c->d.params;
-    c->consts_ready = 1;
-    return 1;
+    return apply_consts(c, &c->d, function);
 }
 
 /* Outputs before the first step: the initial state, zero torques and powers. */
@@ -430,17 +436,13 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
     if (c == NULL || !allowed(c, "fmi2ExitInitializationMode", MODE_INITIALIZATION)) {
         return fmi2Error;
     }
-    gs_rig_consts consts;
-    gs_rig_state state;
     gs_error err;
-    if (gs_fmu_init_rig(THIS_RIG, &c->d.params, &consts, &state, &err) != GS_OK) {
+    if (gs_fmu_init_rig(THIS_RIG, &c->d.params, &c->consts, &c->d.state, &err) != GS_OK) {
         report_parameter_error(c, &c->d, "fmi2ExitInitializationMode", &err);
         return fmi2Error; /* still in initialization mode: the value can be corrected */
     }
-    c->consts = consts;
     c->consts_params = c->d.params;
     c->consts_ready = 1;
-    c->d.state = state;
     c->d.rig_ready = 1;
     c->d.steps = 0;
     initial_outputs(&c->d, &c->consts);
@@ -566,13 +568,9 @@ static fmi2Status set_values(fmu *c, const char *function, gs_fmu_type type, con
         memcmp(&staged.params, &c->d.params, sizeof staged.params) != 0) {
         /* a tunable parameter of a running rig: validate, new constants, the
          * same state */
-        gs_rig_consts consts;
-        if (!derive_consts(c, &staged, &consts, function)) {
+        if (!apply_consts(c, &staged, function)) {
             return fmi2Error;
         }
-        c->consts = consts;
-        c->consts_params = staged.params;
-        c->consts_ready = 1;
         log_info(c, "%s: tunable parameters applied at t = %.17g s", function, current_time(&c->d));
     }
     memcpy(&c->d.params, &staged.params, sizeof staged.params);

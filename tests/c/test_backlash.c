@@ -621,6 +621,30 @@ static void test_block_steady_contact_rigid_torques(void **state)
  * positive direction s_R = +1, D = 0): T_P = r_P*f, F0 = -s_R*f, and by hand
  *   base (pinion) drives:    F_R = eta*F0      (|F_R| = eta*|T_P|/r_P)
  *   rack drives:             F_R = F0/eta      (|T_P| = eta*r_P*|F_R|) */
+static double steady_rack_block_force(double eta, double w_p, double *contact_force,
+                                      double *pinion_torque)
+{
+    gs_rack_pinion_params pp = gs_rack_pinion_params_default();
+    pp.friction_model = GS_FRICTION_CONSTANT_EFFICIENCY;
+    pp.efficiency_const = (gs_real)eta;
+    pp.backlash.enabled = 1;
+    pp.backlash.damping_N_s_m = R(0.0);
+    test_rack rp;
+    INIT_RACK(&rp, &pp);
+    gs_rack_ports_out out;
+    for (int k = 0; k < 7; ++k) { /* close the gap: 0.1 m/s against a held rack */
+        const gs_rack_ports_in in = {R(1.0), R(0.0), R(0.0), R(0.0), R(300.0), 0};
+        gs_rack_pinion_step(&rp.c, &rp.s, R(1e-3), &in, &out);
+    }
+    for (int k = 0; k < 5; ++k) { /* then move together: v = r_P*w_P - v_R = 0 */
+        const gs_rack_ports_in in = {(gs_real)w_p, (gs_real)(0.1 * w_p), R(0.0), R(0.0), R(300.0), 0};
+        gs_rack_pinion_step(&rp.c, &rp.s, R(1e-3), &in, &out);
+    }
+    *contact_force = (double)out.contact_force_N;
+    *pinion_torque = (double)out.pinion_torque_Nm;
+    return (double)out.rack_force_N;
+}
+
 static void test_rack_block_steady_contact_rigid_forces(void **state)
 {
     (void)state;
@@ -629,28 +653,13 @@ static void test_rack_block_steady_contact_rigid_forces(void **state)
         for (int dir = 0; dir < 2; ++dir) {
             /* w_P = +10: v_R = +1 m/s, F0 < 0, the pinion drives; w_P = -10: the rack drives */
             const double w_p = dir == 0 ? 10.0 : -10.0;
-            gs_rack_pinion_params pp = gs_rack_pinion_params_default();
-            pp.friction_model = GS_FRICTION_CONSTANT_EFFICIENCY;
-            pp.efficiency_const = (gs_real)etas[i];
-            pp.backlash.enabled = 1;
-            pp.backlash.damping_N_s_m = R(0.0);
-            test_rack rp;
-            INIT_RACK(&rp, &pp);
-            gs_rack_ports_out out;
-            for (int k = 0; k < 7; ++k) { /* close the gap: 0.1 m/s against a held rack */
-                const gs_rack_ports_in in = {R(1.0), R(0.0), R(0.0), R(0.0), R(300.0), 0};
-                gs_rack_pinion_step(&rp.c, &rp.s, R(1e-3), &in, &out);
-            }
-            for (int k = 0; k < 5; ++k) { /* then move together: v = r_P*w_P - v_R = 0 */
-                const gs_rack_ports_in in = {(gs_real)w_p, (gs_real)(0.1 * w_p), R(0.0), R(0.0), R(300.0), 0};
-                gs_rack_pinion_step(&rp.c, &rp.s, R(1e-3), &in, &out);
-            }
-            const double f = (double)out.contact_force_N;
+            double f, t_p;
+            const double f_r = steady_rack_block_force(etas[i], w_p, &f, &t_p);
             const double f0 = -f;
             assert_true(f > 100.0); /* the teeth are in contact */
-            ASSERT_NEAR((double)out.pinion_torque_Nm, 0.1 * f, TOL_REL, 0.0);
+            ASSERT_NEAR(t_p, 0.1 * f, TOL_REL, 0.0);
             const double want = dir == 0 ? etas[i] * f0 : f0 / etas[i];
-            ASSERT_NEAR((double)out.rack_force_N, want, TOL_REL, 0.0);
+            ASSERT_NEAR(f_r, want, TOL_REL, 0.0);
         }
     }
 }

@@ -235,4 +235,17 @@ static inline int rig_output_finite(const gs_rig_output *o)
     return 1;
 }
 
+/* The n outputs of a and b are the same bits (determinism checks). */
+static inline void assert_outputs_identical(const gs_rig_output *a, const gs_rig_output *b, size_t n,
+                                            const char *what)
+{
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        if (memcmp(&a[k], &b[k], sizeof a[k]) != 0) {
+            print_error("%s: outputs differ first at sample %lu\n", what, (unsigned long)k);
+            fail();
+        }
+    }
+}
+
 #endif /* GEARSIM_TEST_COMMON_H */

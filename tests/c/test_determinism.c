@@ -122,18 +122,6 @@ static void init_full(test_rig *rig, int rack)
     }
 }
 
-static void assert_outputs_identical(const gs_rig_output *a, const gs_rig_output *b, size_t n,
-                                     const char *what)
-{
-    size_t k;
-    for (k = 0; k < n; ++k) {
-        if (memcmp(&a[k], &b[k], sizeof a[k]) != 0) {
-            print_error("%s: outputs differ first at sample %lu\n", what, (unsigned long)k);
-            fail();
-        }
-    }
-}
-
 static void test_run_equals_steps(void **state)
 {
     int rack;

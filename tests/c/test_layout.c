@@ -114,18 +114,6 @@ static void script(gs_rig_input *in, int n, uint64_t seed, int torque_driven)
     }
 }
 
-static void assert_outputs_identical(const gs_rig_output *a, const gs_rig_output *b, size_t n,
-                                     const char *what)
-{
-    size_t k;
-    for (k = 0; k < n; ++k) {
-        if (memcmp(&a[k], &b[k], sizeof a[k]) != 0) {
-            print_error("%s: outputs differ first at sample %lu\n", what, (unsigned long)k);
-            fail();
-        }
-    }
-}
-
 /* (a) Snapshot = state copy: 500 steps, copy the state, 300 steps recorded;
  * restore the copy, the same 300 steps again: bit-identical outputs. The
  * constants are not copied (they never change). */

@@ -109,6 +109,19 @@ static double interp1(const double *x, const double *y, int n, double q)
     return y[i] + (y[i + 1] - y[i]) * (q - x[i]) / (x[i + 1] - x[i]);
 }
 
+/* The efficiency of a temperature table (gs_real parameters, as passed to
+ * the library) at the temperature q. */
+static double table_eta(const gs_real *T, const gs_real *eta, int n, double q)
+{
+    double x[GS_TABLE_MAX], y[GS_TABLE_MAX];
+    int i;
+    for (i = 0; i < n; ++i) {
+        x[i] = (double)T[i];
+        y[i] = (double)eta[i];
+    }
+    return interp1(x, y, n, q);
+}
+
 /* Cell index and weight for a clamped bilinear lookup. */
 static void cell(const double *x, int n, double q, int *i, double *w)
 {
@@ -512,198 +525,191 @@ static void run_case(matrix_stats *st, const case_label *cl, const hand_model *h
         st->failures++;
 }
 
-static void gear_cases(matrix_stats *st)
+/* One case of the simple gear matrix: variant iv, backlash ib, drive id (1: torque),
+ * direction ir, power flow ifl (1: the follower drives). */
+static void gear_case(matrix_stats *st, int iv, int ib, int id, int ir, int ifl)
 {
     const gs_output_rotation rots[2] = {GS_ROTATES_SAME, GS_ROTATES_OPPOSITE};
-    int iv, ib, id, ir, ifl;
-    for (iv = 0; iv < N_GEAR_VARIANTS; ++iv)
-        for (ib = 0; ib < 2; ++ib)
-            for (id = 0; id < 2; ++id)
-                for (ir = 0; ir < 2; ++ir)
-                    for (ifl = 0; ifl < 2; ++ifl) {
-                        const gear_variant *v = &gear_variants[iv];
-                        gs_simple_gear_params gp = gs_simple_gear_params_default();
-                        gs_rig_params rp = gs_rig_params_default();
-                        test_rig rig;
-                        hand_model h;
-                        case_label cl;
-                        double t0 = G_T0, measured_T = 300.0;
-                        gp.teeth_ratio = R(v->g);
-                        gp.output_shaft_rotates = rots[ir];
-                        gp.friction_model = v->model;
-                        gp.loss_smoothing = v->smoothing;
-                        gp.efficiency_const = R(v->eta);
-                        gp.viscous_coefficients[0] = R(G_MUB);
-                        gp.viscous_coefficients[1] = R(G_MUF);
-                        if (v->nominal) {
-                            /* k = 1/0.6 - 1 - 0.8*0.1/4 = 0.6467 < 1 */
-                            gp.idle_torque_Nm = R(0.1);
-                            gp.nominal_output_torque_Nm = R(4.0);
-                            gp.efficiency_nominal = R(0.6);
-                            t0 = (double)gp.nominal_output_torque_Nm;
-                        } else {
-                            /* k = 1/0.8 - 1 - 2.5*0.05/5 = 0.225 */
-                            gp.idle_torque_Nm = R(0.05);
-                            gp.nominal_output_torque_Nm = R(5.0);
-                            gp.efficiency_nominal = R(0.8);
-                        }
-                        if (v->model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY) {
-                            /* eta(311 K) = 0.7 + (11/20)*(0.55 - 0.7) = 0.6175 */
-                            const double Tv[4] = {280.0, 300.0, 320.0, 340.0};
-                            const double ev[4] = {0.9, 0.7, 0.55, 0.4};
-                            int i;
-                            gp.temperature_count = 4;
-                            for (i = 0; i < 4; ++i) {
-                                gp.temperature_vector_K[i] = R(Tv[i]);
-                                gp.efficiency_vector[i] = R(ev[i]);
-                            }
-                            measured_T = G_TMEAS;
-                        }
-                        if (v->model == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY) {
-                            /* base load |T_F|/g = 1.2 N*m, in the cell [0, 4] x [280, 320] K;
-                             * every entry > 0.5, so 2 - 1/eta > 0 (no self-locking) */
-                            const double Tv[3] = {280.0, 320.0, 360.0};
-                            const double Lv[3] = {0.0, 4.0, 12.0};
-                            const double E[3][3] = {
-                                {0.70, 0.85, 0.92}, {0.65, 0.80, 0.90}, {0.60, 0.75, 0.86}};
-                            int i, j;
-                            gp.temperature_count = 3;
-                            gp.load_count = 3;
-                            for (i = 0; i < 3; ++i) {
-                                gp.temperature_vector_K[i] = R(Tv[i]);
-                                gp.load_vector_Nm[i] = R(Lv[i]);
-                                for (j = 0; j < 3; ++j)
-                                    gp.efficiency_matrix[i][j] = R(E[i][j]);
-                            }
-                            measured_T = G_TMEAS2;
-                        }
-                        set_backlash(&gp.backlash, ib, iv + id + ir + ifl);
-                        rp.dt_s = R(DT);
-                        rp.base_drive = id ? GS_BASE_TORQUE_DRIVEN : GS_BASE_SPEED_DRIVEN;
-                        rp.base_inertia_kg_m2 = R(G_JB);
-                        rp.driven_inertia = R(G_JF);
-                        rp.load_coulomb_friction = R(G_COUL);
-                        rp.load_offset = R(G_OFFSET);
-                        rp.temperature_source = GS_TEMPERATURE_FROM_INPUT;
+    const gear_variant *v = &gear_variants[iv];
+    gs_simple_gear_params gp = gs_simple_gear_params_default();
+    gs_rig_params rp = gs_rig_params_default();
+    test_rig rig;
+    hand_model h;
+    case_label cl;
+    double t0 = G_T0, measured_T = 300.0;
+    gp.teeth_ratio = R(v->g);
+    gp.output_shaft_rotates = rots[ir];
+    gp.friction_model = v->model;
+    gp.loss_smoothing = v->smoothing;
+    gp.efficiency_const = R(v->eta);
+    gp.viscous_coefficients[0] = R(G_MUB);
+    gp.viscous_coefficients[1] = R(G_MUF);
+    if (v->nominal) {
+        /* k = 1/0.6 - 1 - 0.8*0.1/4 = 0.6467 < 1 */
+        gp.idle_torque_Nm = R(0.1);
+        gp.nominal_output_torque_Nm = R(4.0);
+        gp.efficiency_nominal = R(0.6);
+        t0 = (double)gp.nominal_output_torque_Nm;
+    } else {
+        /* k = 1/0.8 - 1 - 2.5*0.05/5 = 0.225 */
+        gp.idle_torque_Nm = R(0.05);
+        gp.nominal_output_torque_Nm = R(5.0);
+        gp.efficiency_nominal = R(0.8);
+    }
+    if (v->model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY) {
+        /* eta(311 K) = 0.7 + (11/20)*(0.55 - 0.7) = 0.6175 */
+        const double Tv[4] = {280.0, 300.0, 320.0, 340.0};
+        const double ev[4] = {0.9, 0.7, 0.55, 0.4};
+        int i;
+        gp.temperature_count = 4;
+        for (i = 0; i < 4; ++i) {
+            gp.temperature_vector_K[i] = R(Tv[i]);
+            gp.efficiency_vector[i] = R(ev[i]);
+        }
+        measured_T = G_TMEAS;
+    }
+    if (v->model == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY) {
+        /* base load |T_F|/g = 1.2 N*m, in the cell [0, 4] x [280, 320] K;
+         * every entry > 0.5, so 2 - 1/eta > 0 (no self-locking) */
+        const double Tv[3] = {280.0, 320.0, 360.0};
+        const double Lv[3] = {0.0, 4.0, 12.0};
+        const double E[3][3] = {
+            {0.70, 0.85, 0.92}, {0.65, 0.80, 0.90}, {0.60, 0.75, 0.86}};
+        int i, j;
+        gp.temperature_count = 3;
+        gp.load_count = 3;
+        for (i = 0; i < 3; ++i) {
+            gp.temperature_vector_K[i] = R(Tv[i]);
+            gp.load_vector_Nm[i] = R(Lv[i]);
+            for (j = 0; j < 3; ++j)
+                gp.efficiency_matrix[i][j] = R(E[i][j]);
+        }
+        measured_T = G_TMEAS2;
+    }
+    set_backlash(&gp.backlash, ib, iv + id + ir + ifl);
+    rp.dt_s = R(DT);
+    rp.base_drive = id ? GS_BASE_TORQUE_DRIVEN : GS_BASE_SPEED_DRIVEN;
+    rp.base_inertia_kg_m2 = R(G_JB);
+    rp.driven_inertia = R(G_JF);
+    rp.load_coulomb_friction = R(G_COUL);
+    rp.load_offset = R(G_OFFSET);
+    rp.temperature_source = GS_TEMPERATURE_FROM_INPUT;
 
-                        h = gear_hand(&gp, &rp);
-                        if (v->model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY) {
-                            double Tv[GS_TABLE_MAX], ev[GS_TABLE_MAX];
-                            int i;
-                            for (i = 0; i < gp.temperature_count; ++i) {
-                                Tv[i] = (double)gp.temperature_vector_K[i];
-                                ev[i] = (double)gp.efficiency_vector[i];
-                            }
-                            h.eta = interp1(Tv, ev, gp.temperature_count,
-                                            (double)R(measured_T));
-                        }
-                        cl.blk = BLK_GEAR;
-                        cl.model = v->name;
-                        cl.backlash = ib;
-                        cl.drive = rp.base_drive;
-                        cl.dir = ir == 0 ? "same" : "opposite";
-                        cl.flow = ifl ? FLOW_FOLLOWER_DRIVES : FLOW_BASE_DRIVES;
-                        cl.param = "";
-                        cl.sigma = ((iv + ib + id + ir + ifl) & 1) ? -1.0 : 1.0;
-                        if (id) {
-                            /* start at half the design speed, geared */
-                            rp.initial_base_speed_rad_s = R(0.5 * h.rho * cl.sigma * G_W0);
-                        }
-                        INIT_GEAR_RIG(&rig, &gp, &rp);
-                        if (v->nominal && ifl == 0) {
-                            /* nominal point: |T_F| = tau_nom gives eta = eta_nom, i.e.
-                             * g*|T_B| = tau_nom/eta_nom (2.4 at tau_nom) */
-                            const double a = 1.0 + h.k;
-                            const double gTB = a * t0 + h.C0;
-                            if (!near_enough(gTB, t0 / (double)gp.efficiency_nominal, 1e-12,
-                                             0.0))
-                                fail_msg("nominal point: (1+k)*tau_nom + g*tau_idle = %.15g, "
-                                         "tau_nom/eta_nom = %.15g",
-                                         gTB, t0 / (double)gp.efficiency_nominal);
-                        }
-                        run_case(st, &cl, &h, &rig, G_W0, t0, (double)gp.power_threshold_W,
-                                 (double)gp.speed_threshold_rad_s,
-                                 (double)rp.load_coulomb_speed_threshold, measured_T);
-                    }
+    h = gear_hand(&gp, &rp);
+    if (v->model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY)
+        h.eta = table_eta(gp.temperature_vector_K, gp.efficiency_vector, gp.temperature_count,
+                          (double)R(measured_T));
+    cl.blk = BLK_GEAR;
+    cl.model = v->name;
+    cl.backlash = ib;
+    cl.drive = rp.base_drive;
+    cl.dir = ir == 0 ? "same" : "opposite";
+    cl.flow = ifl ? FLOW_FOLLOWER_DRIVES : FLOW_BASE_DRIVES;
+    cl.param = "";
+    cl.sigma = ((iv + ib + id + ir + ifl) & 1) ? -1.0 : 1.0;
+    if (id) {
+        /* start at half the design speed, geared */
+        rp.initial_base_speed_rad_s = R(0.5 * h.rho * cl.sigma * G_W0);
+    }
+    INIT_GEAR_RIG(&rig, &gp, &rp);
+    if (v->nominal && ifl == 0) {
+        /* nominal point: |T_F| = tau_nom gives eta = eta_nom, i.e.
+         * g*|T_B| = tau_nom/eta_nom (2.4 at tau_nom) */
+        const double a = 1.0 + h.k;
+        const double gTB = a * t0 + h.C0;
+        if (!near_enough(gTB, t0 / (double)gp.efficiency_nominal, 1e-12,
+                         0.0))
+            fail_msg("nominal point: (1+k)*tau_nom + g*tau_idle = %.15g, "
+                     "tau_nom/eta_nom = %.15g",
+                     gTB, t0 / (double)gp.efficiency_nominal);
+    }
+    run_case(st, &cl, &h, &rig, G_W0, t0, (double)gp.power_threshold_W,
+             (double)gp.speed_threshold_rad_s,
+             (double)rp.load_coulomb_speed_threshold, measured_T);
+}
+
+static void gear_cases(matrix_stats *st)
+{
+    int iv, c;
+    for (iv = 0; iv < N_GEAR_VARIANTS; ++iv)
+        for (c = 0; c < 16; ++c) /* ib, id, ir, ifl: bits 3 to 0 */
+            gear_case(st, iv, (c >> 3) & 1, (c >> 2) & 1, (c >> 1) & 1, c & 1);
+}
+
+/* One case of the rack & pinion matrix: variant iv, backlash ib, drive id (1: torque),
+ * direction ir, power flow ifl (1: the follower drives). */
+static void rack_case(matrix_stats *st, int iv, int ib, int id, int ir, int ifl)
+{
+    const gs_rack_direction dirs[2] = {GS_RACK_POSITIVE, GS_RACK_NEGATIVE};
+    const rack_variant *v = &rack_variants[iv];
+    gs_rack_pinion_params pp = gs_rack_pinion_params_default();
+    gs_rig_params rp = gs_rig_params_default();
+    test_rig rig;
+    hand_model h;
+    case_label cl;
+    const int tooth = (iv + ifl + id) & 1;
+    double r_P, measured_T = 300.0;
+    pp.parameterization =
+        tooth ? GS_PARAMETERIZE_TOOTH_PARAMETERS : GS_PARAMETERIZE_PINION_RADIUS;
+    pp.pinion_radius_m = R(0.1);
+    pp.teeth_count = R(24.0);
+    pp.spacing_m = R(0.01);
+    pp.rack_directionality = dirs[ir];
+    pp.friction_model = v->model;
+    pp.efficiency_const = R(v->eta);
+    pp.pinion_viscous_coefficient = R(R_MUP);
+    pp.rack_viscous_coefficient = R(R_MUR);
+    if (v->model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY) {
+        /* defaults [280 300 320] K, [0.95 0.90 0.85]:
+         * eta(313 K) = 0.90 - (13/20)*0.05 = 0.8675 */
+        measured_T = R_TMEAS;
+    }
+    set_backlash(&pp.backlash, ib, iv + id + ir + ifl);
+    rp.dt_s = R(DT);
+    rp.base_drive = id ? GS_BASE_TORQUE_DRIVEN : GS_BASE_SPEED_DRIVEN;
+    rp.base_inertia_kg_m2 = R(R_JB);
+    rp.driven_inertia = R(R_M);
+    rp.load_coulomb_friction = R(R_COUL);
+    rp.load_offset = R(R_OFFSET);
+    rp.temperature_source = GS_TEMPERATURE_FROM_INPUT;
+
+    /* r_P: the parameter, or N*x/(2*pi) (6.2) */
+    r_P = tooth ? (double)pp.teeth_count * (double)pp.spacing_m /
+                      (2.0 * TEST_PI)
+                : (double)pp.pinion_radius_m;
+    memset(&h, 0, sizeof h);
+    h.rho = rack_sign(pp.rack_directionality) / r_P;
+    h.mu_B = (double)pp.pinion_viscous_coefficient;
+    h.mu_F = (double)pp.rack_viscous_coefficient;
+    h.model = pp.friction_model;
+    h.eta = (double)pp.efficiency_const;
+    if (v->model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY)
+        h.eta = table_eta(pp.temperature_vector_K, pp.efficiency_vector, pp.temperature_count,
+                          (double)R(measured_T));
+    h.coul = (double)rp.load_coulomb_friction;
+    h.offset = (double)rp.load_offset;
+
+    cl.blk = BLK_RACK;
+    cl.model = v->name;
+    cl.backlash = ib;
+    cl.drive = rp.base_drive;
+    cl.dir = ir == 0 ? "positive" : "negative";
+    cl.flow = ifl ? FLOW_FOLLOWER_DRIVES : FLOW_BASE_DRIVES;
+    cl.param = tooth ? "tooth" : "radius";
+    cl.sigma = ((iv + ib + id + ir + ifl) & 1) ? -1.0 : 1.0;
+    if (id)
+        rp.initial_base_speed_rad_s = R(0.5 * h.rho * cl.sigma * R_V0);
+    INIT_RACK_RIG(&rig, &pp, &rp);
+    run_case(st, &cl, &h, &rig, R_V0, R_F0, (double)pp.power_threshold_W,
+             0.0, (double)rp.load_coulomb_speed_threshold, measured_T);
 }
 
 static void rack_cases(matrix_stats *st)
 {
-    const gs_rack_direction dirs[2] = {GS_RACK_POSITIVE, GS_RACK_NEGATIVE};
-    int iv, ib, id, ir, ifl;
+    int iv, c;
     for (iv = 0; iv < N_RACK_VARIANTS; ++iv)
-        for (ib = 0; ib < 2; ++ib)
-            for (id = 0; id < 2; ++id)
-                for (ir = 0; ir < 2; ++ir)
-                    for (ifl = 0; ifl < 2; ++ifl) {
-                        const rack_variant *v = &rack_variants[iv];
-                        gs_rack_pinion_params pp = gs_rack_pinion_params_default();
-                        gs_rig_params rp = gs_rig_params_default();
-                        test_rig rig;
-                        hand_model h;
-                        case_label cl;
-                        const int tooth = (iv + ifl + id) & 1;
-                        double r_P, measured_T = 300.0;
-                        pp.parameterization =
-                            tooth ? GS_PARAMETERIZE_TOOTH_PARAMETERS : GS_PARAMETERIZE_PINION_RADIUS;
-                        pp.pinion_radius_m = R(0.1);
-                        pp.teeth_count = R(24.0);
-                        pp.spacing_m = R(0.01);
-                        pp.rack_directionality = dirs[ir];
-                        pp.friction_model = v->model;
-                        pp.efficiency_const = R(v->eta);
-                        pp.pinion_viscous_coefficient = R(R_MUP);
-                        pp.rack_viscous_coefficient = R(R_MUR);
-                        if (v->model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY) {
-                            /* defaults [280 300 320] K, [0.95 0.90 0.85]:
-                             * eta(313 K) = 0.90 - (13/20)*0.05 = 0.8675 */
-                            measured_T = R_TMEAS;
-                        }
-                        set_backlash(&pp.backlash, ib, iv + id + ir + ifl);
-                        rp.dt_s = R(DT);
-                        rp.base_drive = id ? GS_BASE_TORQUE_DRIVEN : GS_BASE_SPEED_DRIVEN;
-                        rp.base_inertia_kg_m2 = R(R_JB);
-                        rp.driven_inertia = R(R_M);
-                        rp.load_coulomb_friction = R(R_COUL);
-                        rp.load_offset = R(R_OFFSET);
-                        rp.temperature_source = GS_TEMPERATURE_FROM_INPUT;
-
-                        /* r_P: the parameter, or N*x/(2*pi) (6.2) */
-                        r_P = tooth ? (double)pp.teeth_count * (double)pp.spacing_m /
-                                          (2.0 * TEST_PI)
-                                    : (double)pp.pinion_radius_m;
-                        memset(&h, 0, sizeof h);
-                        h.rho = rack_sign(pp.rack_directionality) / r_P;
-                        h.mu_B = (double)pp.pinion_viscous_coefficient;
-                        h.mu_F = (double)pp.rack_viscous_coefficient;
-                        h.model = pp.friction_model;
-                        h.eta = (double)pp.efficiency_const;
-                        if (v->model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY) {
-                            double Tv[GS_TABLE_MAX], ev[GS_TABLE_MAX];
-                            int i;
-                            for (i = 0; i < pp.temperature_count; ++i) {
-                                Tv[i] = (double)pp.temperature_vector_K[i];
-                                ev[i] = (double)pp.efficiency_vector[i];
-                            }
-                            h.eta = interp1(Tv, ev, pp.temperature_count, (double)R(measured_T));
-                        }
-                        h.coul = (double)rp.load_coulomb_friction;
-                        h.offset = (double)rp.load_offset;
-
-                        cl.blk = BLK_RACK;
-                        cl.model = v->name;
-                        cl.backlash = ib;
-                        cl.drive = rp.base_drive;
-                        cl.dir = ir == 0 ? "positive" : "negative";
-                        cl.flow = ifl ? FLOW_FOLLOWER_DRIVES : FLOW_BASE_DRIVES;
-                        cl.param = tooth ? "tooth" : "radius";
-                        cl.sigma = ((iv + ib + id + ir + ifl) & 1) ? -1.0 : 1.0;
-                        if (id)
-                            rp.initial_base_speed_rad_s = R(0.5 * h.rho * cl.sigma * R_V0);
-                        INIT_RACK_RIG(&rig, &pp, &rp);
-                        run_case(st, &cl, &h, &rig, R_V0, R_F0, (double)pp.power_threshold_W,
-                                 0.0, (double)rp.load_coulomb_speed_threshold, measured_T);
-                    }
+        for (c = 0; c < 16; ++c) /* ib, id, ir, ifl: bits 3 to 0 */
+            rack_case(st, iv, (c >> 3) & 1, (c >> 2) & 1, (c >> 1) & 1, c & 1);
 }
 
 static void test_settled_matrix(void **state)

@@ -8,6 +8,7 @@ here independently of fmu/src/gs_fmu_model.c, so the tests cross-check it.
 
 from __future__ import annotations
 
+import functools
 import os
 import re
 import shutil
@@ -104,40 +105,10 @@ FIELDS = {"gear": GEAR_FIELDS, "rack": RACK_FIELDS}
 # The rig's inputs and outputs carry the names of gearsim/fields.h in every
 # layer. The FMU's inputs sit under the structured prefix "inputs." (an input
 # and an output are both called base_speed, and base_torque: FMI names are
-# unique); its outputs carry the names as they are.
+# unique); its outputs carry the names as they are. INPUTS and OUTPUTS are
+# read from the public header below (the members of gs_rig_input and
+# gs_rig_output, in order).
 INPUT_PREFIX = "inputs."
-
-INPUTS = {  # FMI input -> gs_rig_input field
-    f"{INPUT_PREFIX}{field}": field
-    for field in (
-        "base_speed",
-        "base_torque",
-        "load",
-        "ambient_temperature",
-        "measured_temperature",
-    )
-}
-
-OUTPUTS = {  # FMI output (= Python RigResult name) -> gs_rig_output field
-    name: name
-    for name in (
-        "base_torque",
-        "base_speed",
-        "base_angle",
-        "follower_speed",
-        "follower_position",
-        "base_port_torque",
-        "follower_port_torque",
-        "mesh_loss_power",
-        "loss_power",
-        "port_power",
-        "contact_energy",
-        "temperature",
-        "backlash_position",
-        "contact_force",
-        "follower_acceleration",
-    )
-}
 
 # gearsim/fields.h writes units as pint parses them; FMI spells these otherwise.
 FMI_UNIT = {"N*m": "N.m", "rad/s^2": "rad/s2", "m/s^2": "m/s2"}
@@ -162,6 +133,7 @@ def split_name(name: str) -> tuple[str, tuple[int, ...]]:
     return m.group(1), idx
 
 
+@functools.cache
 def _preprocessed_header(repo: Path) -> str:
     cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
     if cc is None:
@@ -186,6 +158,21 @@ def _preprocessed_header(repo: Path) -> str:
             text=True,
         ).stdout
     return out
+
+
+def _members(ffi: cffi.FFI, ctype: str) -> list[str]:
+    """The members of a struct of the public header, in order."""
+    return [name for name, _ in ffi.typeof(ctype).fields]
+
+
+_HEADER = cffi.FFI()  # the declarations alone, no library needed
+_HEADER.cdef(_preprocessed_header(Path(__file__).resolve().parents[2]))
+# FMI input -> gs_rig_input member
+INPUTS: dict[str, str] = {
+    f"{INPUT_PREFIX}{field}": field for field in _members(_HEADER, "gs_rig_input")
+}
+# FMI outputs (= Python RigResult names = gs_rig_output members)
+OUTPUTS: tuple[str, ...] = tuple(_members(_HEADER, "gs_rig_output"))
 
 
 class Reference:
@@ -276,8 +263,8 @@ class Reference:
         total = n * substeps
         in_arr = self.ffi.new("gs_rig_input[]", total)
         out_arr = self.ffi.new("gs_rig_output[]", total)
-        fields_in = [f for f, _ in self.ffi.typeof("gs_rig_input").fields]
-        fields_out = [f for f, _ in self.ffi.typeof("gs_rig_output").fields]
+        fields_in = _members(self.ffi, "gs_rig_input")
+        fields_out = _members(self.ffi, "gs_rig_output")
         u = np.frombuffer(self.ffi.buffer(in_arr), dtype=np.float64).reshape(total, len(fields_in))
         for name, field in INPUTS.items():
             if name in inputs:
@@ -289,7 +276,7 @@ class Reference:
             total, len(fields_out)
         )
         y = y[substeps - 1 :: substeps]
-        return {name: y[:, fields_out.index(field)].copy() for name, field in OUTPUTS.items()}
+        return {name: y[:, fields_out.index(name)].copy() for name in OUTPUTS}
 
     def leaf_fields(self, ctype: str, prefix: str = "") -> list[str]:
         """Every scalar or array leaf of a params struct, as dotted paths."""
