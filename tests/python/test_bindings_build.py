@@ -72,8 +72,11 @@ def test_every_public_function_and_table_is_in_the_cdef():
         assert re.search(rf"\bextern const gs_field_info {name}\[\s*\w+\s*\];", cdef), name
         table_type = ffi.typeof(getattr(lib, name))
         assert table_type.item is ffi.typeof("gs_field_info")
-        count = {"input": lib.GS_RIG_INPUT_FIELDS, "output": lib.GS_RIG_OUTPUT_FIELDS,
-                 "state": lib.GS_RIG_STATE_FIELDS}[name.split("_")[2]]
+        count = {
+            "input": lib.GS_RIG_INPUT_FIELDS,
+            "output": lib.GS_RIG_OUTPUT_FIELDS,
+            "state": lib.GS_RIG_STATE_FIELDS,
+        }[name.split("_")[2]]
         assert table_type.length == count, name
 
 

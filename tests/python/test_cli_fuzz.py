@@ -396,8 +396,8 @@ def _mutate_toml(draw, cls: str, base: Base, note: list[str]) -> tuple[bytes, st
     if shared is not None:
         return shared
     if cls == "latin1":
-        note = draw(st.sampled_from(["# Prüfstand 3, Öl bei 80 °C", "# µ-Getriebe"]))
-        return (note + "\n" + text).encode("latin-1"), name
+        comment = draw(st.sampled_from(["# Prüfstand 3, Öl bei 80 °C", "# µ-Getriebe"]))
+        return (comment + "\n" + text).encode("latin-1"), name
     if cls in ("huge_number", "nan", "inf", "empty_field"):
         table, key = draw(st.sampled_from(_NUMERIC_KEYS))
         literal = {

@@ -34,7 +34,10 @@ __all__ = [
     "atomic_write_text",
     "atomic_write_bytes",
     "printable",
+    "one_line",
+    "MESSAGE_LIMIT",
     "same_file",
+    "file_mode",
     "say",
     "stdout_to_devnull",
 ]
@@ -61,6 +64,16 @@ def printable(text: Any, limit: int = 80) -> str:
         out.append(piece)
         length += len(piece)
     return "".join(out)
+
+
+#: Longest error line a command writes on standard error.
+MESSAGE_LIMIT = 600
+
+
+def one_line(text: Any, limit: int = MESSAGE_LIMIT) -> str:
+    """Any message as one printable line: whitespace runs folded, control
+    characters escaped, cut at ``limit`` characters."""
+    return printable(" ".join(str(text).split()), limit=limit)
 
 
 def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
@@ -135,7 +148,7 @@ def _check_writable(directory: str, option: str, shown: str) -> None:
     os.unlink(tmp)
 
 
-def _file_mode(target: str) -> int:
+def file_mode(target: str) -> int:
     """The permissions the written file gets: those of the file it replaces,
     else what open() would give a new file (0666 minus the umask)."""
     try:
@@ -157,7 +170,7 @@ def atomic_writer(
     fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(target)}.", suffix=".tmp", dir=directory)
     try:
         with os.fdopen(fd, mode, **open_kwargs) as fh:
-            os.fchmod(fh.fileno(), _file_mode(target))  # not mkstemp's 0600
+            os.fchmod(fh.fileno(), file_mode(target))  # not mkstemp's 0600
             yield fh
             fh.flush()
             os.fsync(fh.fileno())

@@ -51,7 +51,7 @@ import sys
 from collections.abc import Callable, Sequence
 
 from ._extras import missing_extra, require
-from ._outputs import say, stdout_to_devnull
+from ._outputs import one_line, say, stdout_to_devnull
 
 __all__ = [
     "main",
@@ -81,17 +81,6 @@ start here:  gearsim compare  data.csv --model model.toml     # the error, overa
              gearsim fit      data.csv --model model.toml --add EFFECT --out fitted.toml
 """
 
-#: Longest error line written on standard error.
-MESSAGE_LIMIT = 600
-
-
-def _one_line(text: object) -> str:
-    """``text`` as one printable line (whitespace runs collapsed, control
-    characters escaped, cut at MESSAGE_LIMIT characters)."""
-    from ._outputs import printable
-
-    return printable(" ".join(str(text).split()), limit=MESSAGE_LIMIT)
-
 
 class _Parser(argparse.ArgumentParser):
     """argparse, but a usage error is one printable line on stderr and exit 2;
@@ -100,7 +89,7 @@ class _Parser(argparse.ArgumentParser):
     start_here: str | None = None
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        say(f"{self.prog}: error: {_one_line(message)}")
+        say(f"{self.prog}: error: {one_line(message)}")
         raise SystemExit(EXIT_BAD_INPUT)
 
     def _print_message(self, message: str, file=None) -> None:  # type: ignore[override]
@@ -199,7 +188,7 @@ def _exit_code(code: object) -> int:
         return EXIT_OK
     if isinstance(code, int):
         return code
-    say(_one_line(code))
+    say(one_line(code))
     return EXIT_INTERNAL
 
 
@@ -222,22 +211,22 @@ def _run(argv: Sequence[str] | None) -> int:
     except BrokenPipeError:
         raise  # main() ends quietly
     except _bad_input_types() as exc:
-        say(f"{_one_line(prog)}: error: {_one_line(exc)}")
+        say(f"{one_line(prog)}: error: {one_line(exc)}")
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         if os.environ.get("GEARSIM_DEBUG"):
             raise
-        say(f"{_one_line(prog)}: interrupted")
+        say(f"{one_line(prog)}: interrupted")
         return EXIT_INTERRUPTED
     except Exception as exc:  # internal failure: one line, traceback only on request
-        missing = missing_extra(exc, f"'{_one_line(prog)}'")
+        missing = missing_extra(exc, f"'{one_line(prog)}'")
         if missing is not None:  # not a failure of gearsim: the user can fix it
             say(f"gearsim: {missing}")
             return EXIT_BAD_INPUT
         if os.environ.get("GEARSIM_DEBUG"):
             raise
         say(
-            f"{_one_line(prog)}: internal error: {type(exc).__name__}: {_one_line(exc)} "
+            f"{one_line(prog)}: internal error: {type(exc).__name__}: {one_line(exc)} "
             f"(set GEARSIM_DEBUG=1 for the traceback)"
         )
         return EXIT_INTERNAL

@@ -82,6 +82,12 @@ def refused(capsys, root: Path, *argv, needles=()) -> str:
     return line
 
 
+def cmd_args(name: str, data: Path, model: Path) -> list:
+    """gearsim NAME DATA --model MODEL, with the effect fit needs."""
+    extra = ["--add", "viscous_friction"] if name == "fit" else []
+    return [name, data, "--model", model, *extra]
+
+
 # ---------------------------------------------------------------- 1. outputs never overwrite inputs
 
 
@@ -92,12 +98,7 @@ def test_fit_out_naming_an_input_is_refused(capsys, tmp_path, demo, which):
     refused(
         capsys,
         tmp_path,
-        "fit",
-        data,
-        "--model",
-        model,
-        "--add",
-        "viscous_friction",
+        *cmd_args("fit", data, model),
         "--out",
         target,
         needles=("--out", target.name, "input"),
@@ -109,17 +110,7 @@ def test_fit_out_naming_an_input_through_another_path_is_refused(capsys, tmp_pat
     (tmp_path / "sub").mkdir()
     other = tmp_path / "sub" / ".." / "model.toml"
     refused(
-        capsys,
-        tmp_path,
-        "fit",
-        data,
-        "--model",
-        model,
-        "--add",
-        "viscous_friction",
-        "--out",
-        other,
-        needles=("--out", "input"),
+        capsys, tmp_path, *cmd_args("fit", data, model), "--out", other, needles=("--out", "input")
     )
 
 
@@ -130,10 +121,7 @@ def test_report_out_naming_an_input_is_refused(capsys, tmp_path, demo, which):
     refused(
         capsys,
         tmp_path,
-        "report",
-        data,
-        "--model",
-        model,
+        *cmd_args("report", data, model),
         "--out",
         target,
         needles=("--out", target.name, "input"),
@@ -162,17 +150,7 @@ def test_report_out_dir_holding_an_input_under_a_report_name_is_refused(capsys, 
 def test_fit_out_empty_is_refused(capsys, tmp_path, demo):
     data, model = demo
     refused(
-        capsys,
-        tmp_path,
-        "fit",
-        data,
-        "--model",
-        model,
-        "--add",
-        "viscous_friction",
-        "--out",
-        "",
-        needles=("--out", "empty"),
+        capsys, tmp_path, *cmd_args("fit", data, model), "--out", "", needles=("--out", "empty")
     )
 
 
@@ -187,12 +165,7 @@ def test_fit_out_directory_is_refused(capsys, tmp_path, demo):
     refused(
         capsys,
         tmp_path,
-        "fit",
-        data,
-        "--model",
-        model,
-        "--add",
-        "viscous_friction",
+        *cmd_args("fit", data, model),
         "--out",
         tmp_path / "models",
         needles=("--out", "models", "directory"),
@@ -202,15 +175,10 @@ def test_fit_out_directory_is_refused(capsys, tmp_path, demo):
 @pytest.mark.parametrize("command", ["fit", "report"])
 def test_out_dash_is_refused(capsys, tmp_path, demo, command):
     data, model = demo
-    extra = ["--add", "viscous_friction"] if command == "fit" else []
     refused(
         capsys,
         tmp_path,
-        command,
-        data,
-        "--model",
-        model,
-        *extra,
+        *cmd_args(command, data, model),
         "--out",
         "-",
         needles=("--out -", "standard output"),
@@ -220,17 +188,12 @@ def test_out_dash_is_refused(capsys, tmp_path, demo, command):
 @pytest.mark.parametrize("command", ["fit", "report"])
 def test_out_in_a_missing_directory_fails_before_any_work(capsys, tmp_path, demo, command):
     data, model = demo
-    extra = ["--add", "viscous_friction"] if command == "fit" else []
     out = tmp_path / "nowhere" / ("new.toml" if command == "fit" else "rep")
     # no --quiet: a single line on stderr proves no progress line (no work) came before it
     refused(
         capsys,
         tmp_path,
-        command,
-        data,
-        "--model",
-        model,
-        *extra,
+        *cmd_args(command, data, model),
         "--out",
         out,
         needles=("--out", "nowhere", "does not exist"),
@@ -252,16 +215,11 @@ def test_out_in_an_unwritable_directory_fails_before_any_work(capsys, tmp_path, 
     if not os.path.isdir("/proc"):  # pragma: no cover
         pytest.skip("no /proc")
     data, model = demo
-    extra = ["--add", "viscous_friction"] if command == "fit" else []
     out = "/proc/gearsim-new.toml" if command == "fit" else "/proc/gearsim-report"
     refused(
         capsys,
         tmp_path,
-        command,
-        data,
-        "--model",
-        model,
-        *extra,
+        *cmd_args(command, data, model),
         "--out",
         out,
         needles=("--out", "/proc", "cannot write"),
@@ -280,18 +238,7 @@ def test_fit_out_is_written_atomically_with_ordinary_permissions(capsys, tmp_pat
     assert "viscous" in new.read_text()
     assert (new.stat().st_mode & 0o777) == 0o640  # the replaced file's permissions kept
     fresh = tmp_path / "fresh.toml"
-    status, _, err = gearsim(
-        capsys,
-        "fit",
-        data,
-        "--model",
-        model,
-        "--add",
-        "viscous_friction",
-        "--out",
-        fresh,
-        "--quiet",
-    )
+    status, _, err = gearsim(capsys, *cmd_args("fit", data, model), "--out", fresh, "--quiet")
     assert status == 0, err
     umask = os.umask(0)
     os.umask(umask)
@@ -334,10 +281,7 @@ def test_report_out_existing_file_is_refused(capsys, tmp_path, demo):
     refused(
         capsys,
         tmp_path,
-        "report",
-        data,
-        "--model",
-        model,
+        *cmd_args("report", data, model),
         "--out",
         existing,
         needles=("--out", "notes.txt", "not a directory"),
@@ -554,12 +498,7 @@ def test_input_filter_at_nyquist_is_refused_before_a_fit_writes(capsys, tmp_path
     refused(
         capsys,
         tmp_path,
-        "fit",
-        data,
-        "--model",
-        model,
-        "--add",
-        "viscous_friction",
+        *cmd_args("fit", data, model),
         "--input-filter",
         "500",
         "--out",

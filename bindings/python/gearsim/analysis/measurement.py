@@ -293,7 +293,6 @@ _CONTROL = re.compile(rb"[\x01-\x08\x0b\x0c\x0e-\x1f\x7f]")
 _NOT_CONTROL = bytes(sorted(set(range(256)) - {*range(1, 9), 11, 12, *range(14, 32), 127}))
 _EOL = re.compile(rb"\r\n|\r|\n")
 _EOL_TEXT = re.compile(r"\r\n|\r|\n")
-_NON_SPACE = re.compile(rb"\S")
 
 
 def _read_source(path: str, shown: str) -> bytes:
@@ -934,10 +933,6 @@ def load_measurement(
     if converted:
         notes.info("converted to SI: " + ", ".join(converted))
 
-    if _NON_SPACE.search(data, hdr.body_start) is None:
-        raise MeasurementError(
-            f"has a header (line {hdr.line}) but no data rows{inside}", file=shown
-        )
     how_msg = f" (read{how})" if how else ""
     names = [c.canonical for c in wanted]
     table = _parse_fast(data, hdr.body_start, [c.index for c in wanted], sep, dec)
@@ -1114,27 +1109,27 @@ def _validate(
     source_names = source_names or {}
     where = shown if shown is not None else path
     n = table.shape[0]
-    finite = np.isfinite(table)
-    if not finite.all():
-        bad_rows, bad_cols = np.nonzero(~finite)
-        r, c = int(bad_rows[0]), int(bad_cols[0])
-        raise MeasurementError(
-            f"value {float(table[r, c])!r} is not finite",
-            file=where,
-            line=line_of(r),
-            column=source_names.get(names[c], names[c]),
-        )
-    huge = np.abs(table) > MAX_MAGNITUDE
-    if huge.any():
-        bad_rows, bad_cols = np.nonzero(huge)
-        r, c = int(bad_rows[0]), int(bad_cols[0])
-        raise MeasurementError(
-            f"value {float(table[r, c]):.6g} is beyond the supported magnitude "
-            f"{MAX_MAGNITUDE:g} (SI units): a logging or unit error?",
-            file=where,
-            line=line_of(r),
-            column=source_names.get(names[c], names[c]),
-        )
+
+    def refuse_first(bad: np.ndarray, message: Callable[[float], str]) -> None:
+        """Raise naming the first cell (in row order) where bad is set."""
+        if bad.any():
+            bad_rows, bad_cols = np.nonzero(bad)
+            r, c = int(bad_rows[0]), int(bad_cols[0])
+            raise MeasurementError(
+                message(float(table[r, c])),
+                file=where,
+                line=line_of(r),
+                column=source_names.get(names[c], names[c]),
+            )
+
+    refuse_first(~np.isfinite(table), lambda v: f"value {v!r} is not finite")
+    refuse_first(
+        np.abs(table) > MAX_MAGNITUDE,
+        lambda v: (
+            f"value {v:.6g} is beyond the supported magnitude "
+            f"{MAX_MAGNITUDE:g} (SI units): a logging or unit error?"
+        ),
+    )
     t = table[:, names.index("time")]
     tname = source_names.get("time", "time")
     if n < MIN_SAMPLES:

@@ -36,16 +36,20 @@ from pathlib import Path
 from typing import Any
 
 from .._extras import EXTRAS, missing_extra, require
-from .._outputs import atomic_write_bytes, check_output, printable, say, stdout_to_devnull
+from .._outputs import (
+    atomic_write_bytes,
+    check_output,
+    one_line,
+    printable,
+    say,
+    stdout_to_devnull,
+)
+from ..cli import EXIT_BROKEN_PIPE, EXIT_INTERRUPTED
 from ..errors import GearsimError, InputError
 
 __all__ = ["add_subparsers", "build_parser", "main", "run_args"]
 
 _DESCRIPTION = "HIL bridge: a gearsim rig behind a CAN bus (docs/hil.md)"
-
-
-#: Exit status when standard output is a pipe its reader closed (128 + SIGPIPE).
-EXIT_BROKEN_PIPE = 141
 
 
 class _InputError(InputError):
@@ -56,19 +60,13 @@ class _Parser(argparse.ArgumentParser):
     """argparse, but a usage error is one line on standard error and exit 2."""
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        sys.stderr.write(f"{self.prog}: error: {_one_line(message)}\n")
+        sys.stderr.write(f"{self.prog}: error: {one_line(message)}\n")
         raise SystemExit(2)
-
-
-def _one_line(text: Any) -> str:
-    """Any message as one printable line (whitespace runs folded, control
-    characters escaped, cut when very long)."""
-    return printable(" ".join(str(text).split()), limit=600)
 
 
 def _show(path: Any) -> str:
     """A path for a success message: escaped, cut only when absurdly long."""
-    return printable(os.fspath(path) if not isinstance(path, str) else path, limit=1000)
+    return printable(os.fspath(path), limit=1000)
 
 
 # -- parser -------------------------------------------------------------------------
@@ -293,11 +291,11 @@ def run_args(args: argparse.Namespace) -> int:
         return EXIT_BROKEN_PIPE
     except KeyboardInterrupt:
         say(f"{prog}: interrupted")
-        return 130
+        return EXIT_INTERRUPTED
     except (GearsimError, ValueError, OSError) as exc:
         # bad input: missing or unreadable files, a log or DBC that does not fit,
         # options out of range, a bus that does not open, a full disk, ...
-        say(f"{prog}: error: {_one_line(exc)}")
+        say(f"{prog}: error: {one_line(exc)}")
         return 2
     except Exception as exc:  # internal failure: one line, the traceback on request
         missing = missing_extra(exc, f"'{prog}'")
@@ -307,7 +305,7 @@ def run_args(args: argparse.Namespace) -> int:
         if os.environ.get("GEARSIM_DEBUG"):
             raise
         say(
-            f"{prog}: internal error: {type(exc).__name__}: {_one_line(exc)} "
+            f"{prog}: internal error: {type(exc).__name__}: {one_line(exc)} "
             "(set GEARSIM_DEBUG=1 for the traceback)"
         )
         return 1
@@ -417,7 +415,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     try:
         bus = can.Bus(interface=args.interface, channel=args.channel, bitrate=args.bitrate)
     except (can.CanError, OSError, ValueError, ImportError, NotImplementedError) as exc:
-        raise _InputError(f"cannot open CAN bus {where}: {_one_line(exc)}") from None
+        raise _InputError(f"cannot open CAN bus {where}: {one_line(exc)}") from None
     logger = None
     stop = threading.Event()
     previous: dict[int, Any] = {}

@@ -42,8 +42,7 @@ from typing import Any
 
 import can
 
-from .. import _outputs
-from .._outputs import check_output, printable
+from .._outputs import check_output, file_mode, printable
 from ..errors import InputError
 from .bridge import Bridge
 from .codec import RigDbc
@@ -282,9 +281,7 @@ class AtomicLogWriter:
         self._done = False
         try:
             # the permissions of the file replaced, or of a new file (not mkstemp's 0600)
-            file_mode = getattr(_outputs, "_file_mode", None)
-            if file_mode is not None:
-                os.fchmod(fd, file_mode(self.path))
+            os.fchmod(fd, file_mode(self.path))
             os.close(fd)
             fd = -1
             self.writer = can.Logger(self.tmp)
@@ -367,6 +364,11 @@ class ReplayResult:
         }
 
 
+def _check_tail(tail: Any) -> None:
+    if not (isinstance(tail, (int, float)) and math.isfinite(tail) and tail >= 0):
+        raise LogError(f"tail must be a time >= 0 s, got {tail!r}", parameter="tail")
+
+
 def _advance(bridge: Bridge, periods: int) -> None:
     """bridge.advance(periods) in chunks of at most CHUNK_STEPS rig steps
     (the same frames as one call: batched and single periods are identical)."""
@@ -397,8 +399,7 @@ def replay_messages(
     A timestamp that is not finite, or that jumps by more than ``max_gap``
     seconds from the previous frame (None: no limit), raises a LogError
     (``name`` names the log). Returns the number of messages."""
-    if not (isinstance(tail, (int, float)) and math.isfinite(tail) and tail >= 0):
-        raise LogError(f"tail must be a time >= 0 s, got {tail!r}", parameter="tail")
+    _check_tail(tail)
     check = TimeCheck(max_gap, name)
     period = bridge.period
     n = 0
@@ -466,8 +467,7 @@ def replay(
         check_output(out, [log, dbc if not isinstance(dbc, RigDbc) else None], option="--out")
         log_writer_format(out)
     TimeCheck(max_gap)  # validates max_gap before any work
-    if not (isinstance(tail, (int, float)) and math.isfinite(tail) and tail >= 0):
-        raise LogError(f"tail must be a time >= 0 s, got {tail!r}", parameter="tail")
+    _check_tail(tail)
     reader = read_log(log)
     writer: AtomicLogWriter | None = None
     try:
