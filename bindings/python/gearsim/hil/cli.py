@@ -65,7 +65,8 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _show(path: Any) -> str:
-    """A path for a success message: escaped, cut only when absurdly long."""
+    """A path for a message: escaped, cut only when absurdly long (a user
+    must see which file was meant, however deep the directory)."""
     return printable(os.fspath(path), limit=1000)
 
 
@@ -331,7 +332,7 @@ def _load_model(path: str) -> Any:
     import gearsim
 
     if not Path(path).is_file():
-        raise _InputError(f"{printable(path)}: no such model file")
+        raise _InputError(f"{_show(path)}: no such model file")
     return gearsim.Model.load(path)
 
 
@@ -339,7 +340,7 @@ def _dbc_for(args: argparse.Namespace, block: str | None) -> Any:
     from .codec import RigDbc
 
     if args.dbc is not None and not Path(args.dbc).is_file():
-        raise _InputError(f"{printable(args.dbc)}: no such DBC file")
+        raise _InputError(f"{_show(args.dbc)}: no such DBC file")
     return RigDbc(args.dbc, block=block)
 
 
@@ -497,7 +498,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         check_output(args.out, _inputs(args, "log", "model", "dbc"), option="--out")
         log_writer_format(args.out, option="--out")
     if not Path(args.log).is_file():
-        raise _InputError(f"{printable(args.log)}: no such log file")
+        raise _InputError(f"{_show(args.log)}: no such log file")
     model = _load_model(args.model)
     dbc = _dbc_for(args, model.block)
     # the answers go to a temporary file, renamed over --out at the end; a
@@ -539,7 +540,7 @@ def _cmd_to_csv(args: argparse.Namespace) -> int:
         raise _InputError(f"--max-samples must be >= 2, got {max_samples}")
     out = check_output(args.out, _inputs(args, "log", "model", "dbc"), option="--out")
     if not Path(args.log).is_file():
-        raise _InputError(f"{printable(args.log)}: no such log file")
+        raise _InputError(f"{_show(args.log)}: no such log file")
     block = None
     if args.rig:
         block = block_name(args.rig)
