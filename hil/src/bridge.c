@@ -1,0 +1,537 @@
+/*
+ * The bridge's logic (gearsim/hil.h), period by period, with the semantics of
+ * the Python bridge (docs/hil.md, "Time model", "Commands, modes, safe
+ * state", "Frame classes and counters", "Status"): for the same frames at
+ * the same periods it steps the rig with the same inputs and sends the same
+ * bytes. No I/O, no heap: everything lives in the gs_hil_bridge.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "gearsim/hil.h"
+
+static const char *const reason_names[GS_HIL_REASONS] = {
+    "pending",
+    "rejected.unknown_id",
+    "rejected.bad_length",
+    "rejected.undecodable",
+    "rejected.out_of_range",
+    "rejected.mode_mismatch",
+    "late.superseded",
+    "late.out_of_order",
+    "late.after_stop",
+    "ignored.feedback_id",
+    "ignored.other_dbc_frame",
+    "ignored.error_frame",
+    "ignored.remote_frame",
+};
+
+static const char *const count_names[GS_HIL_COUNTS] = {
+    "rx_total",  "rx_used",    "rx_rejected", "rx_late", "rx_ignored",  "tx_frames", "tx_errors",
+    "timeouts", "recoveries", "overruns",    "resyncs", "saturations", "periods",
+};
+
+static const char *const flag_names[GS_HIL_FLAGS] = {
+    "cmd_timeout", "safe_state", "drive_disabled", "cmd_rejected",
+    "cmd_late",    "fb_saturated", "overrun",     "tx_error",
+};
+
+/* The latched flags and the counters whose growth sets them. */
+static const gs_hil_count latched_counts[5] = {
+    GS_HIL_COUNT_RX_REJECTED, GS_HIL_COUNT_RX_LATE, GS_HIL_COUNT_SATURATIONS,
+    GS_HIL_COUNT_OVERRUNS,    GS_HIL_COUNT_TX_ERRORS,
+};
+
+const char *gs_hil_reason_name(gs_hil_reason reason)
+{
+    return (unsigned)reason < GS_HIL_REASONS ? reason_names[reason] : "?";
+}
+
+const char *gs_hil_count_name(gs_hil_count count)
+{
+    return (unsigned)count < GS_HIL_COUNTS ? count_names[count] : "?";
+}
+
+const char *gs_hil_flag_name(gs_hil_flag flag)
+{
+    return (unsigned)flag < GS_HIL_FLAGS ? flag_names[flag] : "?";
+}
+
+static gs_hil_count reason_class(gs_hil_reason reason)
+{
+    if (reason >= GS_HIL_IGNORED_FEEDBACK_ID) {
+        return GS_HIL_COUNT_RX_IGNORED;
+    }
+    if (reason >= GS_HIL_LATE_SUPERSEDED) {
+        return GS_HIL_COUNT_RX_LATE;
+    }
+    return GS_HIL_COUNT_RX_REJECTED;
+}
+
+static gs_hil_reason count_reason(gs_hil_bridge *b, gs_hil_reason reason)
+{
+    b->counters.count[reason_class(reason)] += 1u;
+    b->counters.reasons[reason] += 1u;
+    return reason;
+}
+
+static gs_hil_status fail(gs_hil_error *err, const char *parameter, const char *message)
+{
+    if (err != NULL) {
+        err->parameter = parameter;
+        snprintf(err->message, sizeof err->message, "%s", message);
+    }
+    return GS_HIL_E_CONFIG;
+}
+
+static int command_role_slot(gs_hil_role role)
+{
+    switch (role) {
+    case GS_HIL_ROLE_CMD_BASE_SPEED:
+        return GS_HIL_CMD_BASE_SPEED;
+    case GS_HIL_ROLE_CMD_BASE_TORQUE:
+        return GS_HIL_CMD_BASE_TORQUE;
+    case GS_HIL_ROLE_CMD_LOAD:
+        return GS_HIL_CMD_LOAD;
+    case GS_HIL_ROLE_CMD_MODE:
+        return GS_HIL_CMD_MODE;
+    case GS_HIL_ROLE_NONE:
+    case GS_HIL_ROLE_OUT:
+    case GS_HIL_ROLE_OUT_FOLLOWER_ANGLE:
+    case GS_HIL_ROLE_IN_BASE_SPEED:
+    case GS_HIL_ROLE_IN_BASE_TORQUE:
+    case GS_HIL_ROLE_IN_LOAD:
+    case GS_HIL_ROLE_STATUS_COUNTER:
+    case GS_HIL_ROLE_STATUS_FLAG:
+    case GS_HIL_ROLE_STATUS_COUNT:
+    default:
+        return -1;
+    }
+}
+
+/* Feedback frames in sending order: the others by ID, then the status frames
+ * by ID (so a status frame sees the saturations of its own period). */
+static void order_feedback(gs_hil_bridge *b)
+{
+    const gs_hil_dbc *dbc = b->config.dbc;
+    b->feedback_count = 0;
+    for (int status = 0; status <= 1; ++status) {
+        unsigned first = b->feedback_count;
+        for (unsigned i = 0; i < dbc->frame_count; ++i) {
+            const gs_hil_frame_spec *f = &dbc->frames[i];
+            if (f->kind != GS_HIL_FRAME_FEEDBACK || (f->is_status != 0) != (status != 0)) {
+                continue;
+            }
+            unsigned j = b->feedback_count++;
+            while (j > first && dbc->frames[b->feedback_order[j - 1u]].id > f->id) {
+                b->feedback_order[j] = b->feedback_order[j - 1u];
+                --j;
+            }
+            b->feedback_order[j] = i;
+        }
+    }
+}
+
+static gs_hil_status check_cycles(gs_hil_bridge *b, gs_hil_error *err)
+{
+    const gs_hil_dbc *dbc = b->config.dbc;
+    for (unsigned i = 0; i < dbc->frame_count; ++i) {
+        const gs_hil_frame_spec *f = &dbc->frames[i];
+        b->cycle_periods[i] = 0;
+        if (f->kind != GS_HIL_FRAME_FEEDBACK) {
+            continue;
+        }
+        double n = ((double)f->cycle_ms / 1000.0) / b->period_s;
+        double whole = nearbyint(n);
+        if (fabs(n - whole) > 1e-6 * (n > 1.0 ? n : 1.0) || whole < 1.0 || whole > 4294967295.0) {
+            char text[200];
+            snprintf(text, sizeof text,
+                     "feedback frame %s: cycle time %u ms is not a whole number of frame periods (%g ms)",
+                     f->name, f->cycle_ms, b->period_s * 1e3);
+            return fail(err, "period", text);
+        }
+        b->cycle_periods[i] = (unsigned)whole;
+    }
+    return GS_HIL_OK;
+}
+
+static gs_hil_status index_commands(gs_hil_bridge *b, gs_hil_error *err)
+{
+    const gs_hil_dbc *dbc = b->config.dbc;
+    b->command_count = 0;
+    for (unsigned i = 0; i < dbc->frame_count; ++i) {
+        const gs_hil_frame_spec *f = &dbc->frames[i];
+        b->command_index[i] = 0;
+        if (f->kind != GS_HIL_FRAME_COMMAND) {
+            continue;
+        }
+        if (b->command_count == GS_HIL_MAX_COMMAND_FRAMES) {
+            return fail(err, "dbc", "more than 4 command frames");
+        }
+        b->command_index[i] = b->command_count++;
+        for (unsigned s = 0; s < f->signal_count; ++s) {
+            int slot = command_role_slot(f->signals[s].role);
+            if (slot >= 0) {
+                b->has_role[slot] = 1;
+            }
+        }
+    }
+    return GS_HIL_OK;
+}
+
+gs_hil_status gs_hil_bridge_init(gs_hil_bridge *b, const gs_hil_config *config, gs_rig_block block,
+                                 const gs_rig_consts *consts, gs_rig_state *state, gs_hil_error *err)
+{
+    if (b == NULL || config == NULL || config->dbc == NULL || consts == NULL || state == NULL) {
+        return fail(err, "bridge", "a required pointer is NULL");
+    }
+    memset(b, 0, sizeof *b);
+    b->config = *config;
+    b->consts = consts;
+    b->state = state;
+    if (config->dbc->block != block) {
+        return fail(err, "dbc", "the DBC is for the other rig block");
+    }
+    if (config->substeps < 1u) {
+        return fail(err, "substeps", "substeps must be an integer >= 1");
+    }
+    if (!(isfinite(config->timeout_s) && config->timeout_s > 0.0)) {
+        return fail(err, "timeout", "timeout must be a time > 0 s");
+    }
+    b->period_s = (double)config->dt_s * (double)config->substeps;
+    if (!(isfinite(b->period_s) && b->period_s > 0.0)) {
+        return fail(err, "period", "period must be a time > 0 s");
+    }
+    double timeout_periods = nearbyint(config->timeout_s / b->period_s);
+    if (!(timeout_periods < 1e15)) {
+        return fail(err, "timeout", "timeout is too many periods");
+    }
+    b->timeout_periods = timeout_periods < 1.0 ? 1u : (uint64_t)timeout_periods;
+    if (index_commands(b, err) != GS_HIL_OK || check_cycles(b, err) != GS_HIL_OK) {
+        return GS_HIL_E_CONFIG;
+    }
+    int driving = config->base_drive == GS_BASE_SPEED_DRIVEN ? GS_HIL_CMD_BASE_SPEED : GS_HIL_CMD_BASE_TORQUE;
+    if (!b->has_role[driving]) {
+        return fail(err, "dbc",
+                    driving == GS_HIL_CMD_BASE_SPEED
+                        ? "the DBC has no cmd.base_speed signal, which a speed-driven rig needs"
+                        : "the DBC has no cmd.base_torque signal, which a torque-driven rig needs");
+    }
+    order_feedback(b);
+    b->timed_out = 1;
+    b->dirty = 1;
+    b->flag_state[GS_HIL_FLAG_CMD_TIMEOUT] = 1;
+    b->flag_state[GS_HIL_FLAG_SAFE_STATE] = 1;
+    b->input.ambient_temperature = config->ambient_temperature_K;
+    b->input.measured_temperature = config->ambient_temperature_K;
+    return GS_HIL_OK;
+}
+
+unsigned gs_hil_pending(const gs_hil_bridge *b)
+{
+    unsigned n = 0;
+    for (unsigned i = 0; i < b->command_count; ++i) {
+        n += b->commands[i].has_pending ? 1u : 0u;
+    }
+    return n;
+}
+
+static const gs_hil_frame_spec *find_frame(const gs_hil_dbc *dbc, const gs_hil_frame *frame, unsigned *index)
+{
+    for (unsigned i = 0; i < dbc->frame_count; ++i) {
+        if (dbc->frames[i].id == frame->id && (dbc->frames[i].is_extended != 0) == (frame->is_extended != 0)) {
+            *index = i;
+            return &dbc->frames[i];
+        }
+    }
+    return NULL;
+}
+
+gs_hil_reason gs_hil_handle(gs_hil_bridge *b, const gs_hil_frame *frame)
+{
+    unsigned index = 0;
+    gs_hil_command cmd;
+    b->counters.count[GS_HIL_COUNT_RX_TOTAL] += 1u;
+    if (frame->is_error) {
+        return count_reason(b, GS_HIL_IGNORED_ERROR_FRAME);
+    }
+    if (frame->is_remote) {
+        return count_reason(b, GS_HIL_IGNORED_REMOTE_FRAME);
+    }
+    const gs_hil_frame_spec *spec = find_frame(b->config.dbc, frame, &index);
+    if (spec == NULL) {
+        return count_reason(b, GS_HIL_REJECTED_UNKNOWN_ID);
+    }
+    if (spec->kind == GS_HIL_FRAME_FEEDBACK) {
+        return count_reason(b, GS_HIL_IGNORED_FEEDBACK_ID);
+    }
+    if (spec->kind == GS_HIL_FRAME_OTHER) {
+        return count_reason(b, GS_HIL_IGNORED_OTHER_DBC_FRAME);
+    }
+    gs_hil_reason decoded = gs_hil_decode_command(spec, frame->data, frame->length, &cmd);
+    if (decoded != GS_HIL_PENDING) {
+        return count_reason(b, decoded);
+    }
+    if (cmd.present[GS_HIL_CMD_MODE]) {
+        int mode = (int)cmd.value[GS_HIL_CMD_MODE];
+        int drive = b->config.base_drive == GS_BASE_SPEED_DRIVEN ? GS_HIL_MODE_SPEED : GS_HIL_MODE_TORQUE;
+        if (mode != GS_HIL_MODE_DISABLED && mode != drive) {
+            return count_reason(b, GS_HIL_REJECTED_MODE_MISMATCH);
+        }
+    }
+    gs_hil_command_slot *slot = &b->commands[b->command_index[index]];
+    if ((slot->has_held && frame->timestamp_s < slot->held_ts) ||
+        (slot->has_pending && frame->timestamp_s < slot->pending_ts)) {
+        return count_reason(b, GS_HIL_LATE_OUT_OF_ORDER);
+    }
+    if (slot->has_pending) {
+        count_reason(b, GS_HIL_LATE_SUPERSEDED);
+    }
+    slot->pending = cmd;
+    slot->pending_ts = frame->timestamp_s;
+    slot->has_pending = 1;
+    return GS_HIL_PENDING;
+}
+
+static void apply_pending(gs_hil_bridge *b)
+{
+    uint64_t now = b->counters.count[GS_HIL_COUNT_PERIODS];
+    int applied = 0;
+    for (unsigned i = 0; i < b->command_count; ++i) {
+        gs_hil_command_slot *slot = &b->commands[i];
+        if (!slot->has_pending) {
+            continue;
+        }
+        slot->held = slot->pending;
+        slot->held_ts = slot->pending_ts;
+        slot->has_held = 1;
+        slot->has_pending = 0;
+        slot->last_rx_period = now;
+        slot->has_last_rx = 1;
+        b->counters.count[GS_HIL_COUNT_RX_USED] += 1u;
+        applied = 1;
+    }
+    if (applied) {
+        b->ever_commanded = 1;
+        b->dirty = 1;
+    }
+}
+
+/* The timeout, the safe state and the inputs for the coming periods. */
+static void update_state(gs_hil_bridge *b)
+{
+    uint64_t now = b->counters.count[GS_HIL_COUNT_PERIODS];
+    int stale = 0;
+    uint64_t oldest = UINT64_MAX;
+    gs_hil_command held;
+    memset(&held, 0, sizeof held);
+    for (unsigned i = 0; i < b->command_count; ++i) {
+        const gs_hil_command_slot *slot = &b->commands[i];
+        if (!slot->has_last_rx || now - slot->last_rx_period > b->timeout_periods) {
+            stale = 1;
+        }
+        if (slot->has_last_rx && slot->last_rx_period < oldest) {
+            oldest = slot->last_rx_period;
+        }
+        for (int r = 0; r < GS_HIL_CMD_ROLES && slot->has_held; ++r) {
+            if (slot->held.present[r]) {
+                held.value[r] = slot->held.value[r];
+                held.present[r] = 1;
+            }
+        }
+    }
+    gs_hil_counters *c = &b->counters;
+    if (stale && !b->timed_out && b->ever_commanded) {
+        c->count[GS_HIL_COUNT_TIMEOUTS] += 1u;
+    } else if (!stale && b->timed_out && c->count[GS_HIL_COUNT_TIMEOUTS] > c->count[GS_HIL_COUNT_RECOVERIES]) {
+        c->count[GS_HIL_COUNT_RECOVERIES] += 1u;
+    }
+    b->timed_out = stale;
+    b->dirty = 0;
+    if (!stale) {
+        b->stale_at = oldest + b->timeout_periods + 1u; /* first period at which a command is stale */
+    }
+    int disabled = !stale && held.present[GS_HIL_CMD_MODE] && (int)held.value[GS_HIL_CMD_MODE] == GS_HIL_MODE_DISABLED;
+    int safe = stale || disabled;
+    b->flag_state[GS_HIL_FLAG_CMD_TIMEOUT] = stale;
+    b->flag_state[GS_HIL_FLAG_SAFE_STATE] = safe;
+    b->flag_state[GS_HIL_FLAG_DRIVE_DISABLED] = disabled;
+    gs_rig_input *in = &b->input;
+    in->base_speed = 0;
+    in->base_torque = 0;
+    in->load = 0;
+    if (safe) {
+        return;
+    }
+    if (held.present[GS_HIL_CMD_LOAD]) {
+        in->load = (gs_real)held.value[GS_HIL_CMD_LOAD];
+    }
+    if (b->config.base_drive == GS_BASE_SPEED_DRIVEN) {
+        in->base_speed = (gs_real)held.value[GS_HIL_CMD_BASE_SPEED];
+    } else {
+        in->base_torque = (gs_real)held.value[GS_HIL_CMD_BASE_TORQUE];
+    }
+}
+
+static const double two_pi = 2.0 * 3.141592653589793;
+
+/* Python's math.fmod(x, 2*pi) % (2*pi): in [0, 2*pi), +0.0 for a zero remainder. */
+static double angle_modulo(double x)
+{
+    double r = fmod(x, two_pi);
+    double m = fmod(r, two_pi);
+    if (m < 0.0) {
+        m += two_pi;
+    } else if (!(m > 0.0)) {
+        m = 0.0; /* -0.0 becomes +0.0, as in Python */
+    }
+    return m;
+}
+
+static double role_value(const gs_hil_bridge *b, const gs_hil_signal *sig)
+{
+    const gs_real *out = (const gs_real *)(const void *)&b->output;
+    switch (sig->role) {
+    case GS_HIL_ROLE_OUT:
+        return (double)out[sig->aux];
+    case GS_HIL_ROLE_OUT_FOLLOWER_ANGLE:
+        return angle_modulo((double)b->output.follower_position);
+    case GS_HIL_ROLE_IN_BASE_SPEED:
+        return (double)b->input.base_speed;
+    case GS_HIL_ROLE_IN_BASE_TORQUE:
+        return (double)b->input.base_torque;
+    case GS_HIL_ROLE_IN_LOAD:
+        return (double)b->input.load;
+    case GS_HIL_ROLE_NONE:
+    case GS_HIL_ROLE_CMD_BASE_SPEED:
+    case GS_HIL_ROLE_CMD_BASE_TORQUE:
+    case GS_HIL_ROLE_CMD_LOAD:
+    case GS_HIL_ROLE_CMD_MODE:
+    case GS_HIL_ROLE_STATUS_COUNTER:
+    case GS_HIL_ROLE_STATUS_FLAG:
+    case GS_HIL_ROLE_STATUS_COUNT:
+    default:
+        return nan("");
+    }
+}
+
+/* A signal without a role is sent as the value in its range nearest 0. */
+static double nearest_zero_value(const gs_hil_signal *sig)
+{
+    double x = sig->minimum > 0.0 ? sig->minimum : 0.0;
+    return x < sig->maximum ? x : sig->maximum;
+}
+
+/* Flags latched since the previous frame of this ID (updated once per frame). */
+static void latch_flags(gs_hil_bridge *b, unsigned frame_index, int latched[5])
+{
+    for (unsigned k = 0; k < 5u; ++k) {
+        uint64_t now = b->counters.count[latched_counts[k]];
+        latched[k] = now > b->latched_at[frame_index][k];
+        b->latched_at[frame_index][k] = now;
+    }
+}
+
+static void encode_signal(gs_hil_bridge *b, unsigned frame_index, const gs_hil_signal *sig, uint8_t *data,
+                          int latched[5], int *have_latched)
+{
+    switch (sig->role) {
+    case GS_HIL_ROLE_STATUS_COUNTER:
+        gs_hil_put_raw(sig, b->status_seq[frame_index]++, data);
+        return;
+    case GS_HIL_ROLE_STATUS_COUNT:
+        gs_hil_put_raw(sig, b->counters.count[sig->aux], data);
+        return;
+    case GS_HIL_ROLE_STATUS_FLAG:
+        if (sig->aux <= GS_HIL_FLAG_DRIVE_DISABLED) {
+            gs_hil_put_raw(sig, (uint64_t)(b->flag_state[sig->aux] != 0), data);
+            return;
+        }
+        if (!*have_latched) {
+            latch_flags(b, frame_index, latched);
+            *have_latched = 1;
+        }
+        gs_hil_put_raw(sig, (uint64_t)(latched[sig->aux - GS_HIL_FLAG_CMD_REJECTED] != 0), data);
+        return;
+    case GS_HIL_ROLE_NONE:
+        (void)gs_hil_put_value(sig, nearest_zero_value(sig), data);
+        return;
+    case GS_HIL_ROLE_CMD_BASE_SPEED:
+    case GS_HIL_ROLE_CMD_BASE_TORQUE:
+    case GS_HIL_ROLE_CMD_LOAD:
+    case GS_HIL_ROLE_CMD_MODE:
+    case GS_HIL_ROLE_OUT:
+    case GS_HIL_ROLE_OUT_FOLLOWER_ANGLE:
+    case GS_HIL_ROLE_IN_BASE_SPEED:
+    case GS_HIL_ROLE_IN_BASE_TORQUE:
+    case GS_HIL_ROLE_IN_LOAD:
+    default:
+        if (gs_hil_put_value(sig, role_value(b, sig), data)) {
+            b->counters.count[GS_HIL_COUNT_SATURATIONS] += 1u;
+        }
+        return;
+    }
+}
+
+static void emit(gs_hil_bridge *b)
+{
+    uint64_t n = b->counters.count[GS_HIL_COUNT_PERIODS];
+    gs_hil_frame frame;
+    for (unsigned k = 0; k < b->feedback_count; ++k) {
+        unsigned i = b->feedback_order[k];
+        if (n % b->cycle_periods[i] != 0u) {
+            continue;
+        }
+        const gs_hil_frame_spec *spec = &b->config.dbc->frames[i];
+        int latched[5] = {0};
+        int have_latched = 0;
+        memset(&frame, 0, sizeof frame);
+        frame.timestamp_s = b->config.stamp_origin_s + (double)n * b->period_s;
+        frame.id = spec->id;
+        frame.is_extended = spec->is_extended;
+        frame.length = spec->length;
+        for (unsigned s = 0; s < spec->signal_count; ++s) {
+            encode_signal(b, i, &spec->signals[s], frame.data, latched, &have_latched);
+        }
+        if (b->config.send != NULL && b->config.send(b->config.send_context, &frame) != 0) {
+            b->counters.count[GS_HIL_COUNT_TX_ERRORS] += 1u;
+        } else {
+            b->counters.count[GS_HIL_COUNT_TX_FRAMES] += 1u;
+        }
+    }
+}
+
+void gs_hil_advance(gs_hil_bridge *b, uint64_t periods)
+{
+    if (b->closed) {
+        return;
+    }
+    for (uint64_t p = 0; p < periods; ++p) {
+        apply_pending(b);
+        uint64_t now = b->counters.count[GS_HIL_COUNT_PERIODS];
+        if (b->dirty || (!b->timed_out && now >= b->stale_at)) {
+            update_state(b);
+        }
+        for (unsigned s = 0; s < b->config.substeps; ++s) {
+            gs_rig_step(b->consts, b->state, &b->input, &b->output);
+        }
+        b->counters.steps += b->config.substeps;
+        b->counters.count[GS_HIL_COUNT_PERIODS] = now + 1u;
+        emit(b);
+    }
+}
+
+void gs_hil_close(gs_hil_bridge *b)
+{
+    if (b->closed) {
+        return;
+    }
+    for (unsigned i = 0; i < b->command_count; ++i) {
+        if (b->commands[i].has_pending) {
+            b->commands[i].has_pending = 0;
+            count_reason(b, GS_HIL_LATE_AFTER_STOP);
+        }
+    }
+    b->closed = 1;
+}

@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# HIL loop timing and replay throughput: the C runner gearsim-hil (default
+# scheduling and SCHED_FIFO where permitted) and the Python bridge side by
+# side (bench/hil_bench.py; docs/hil-runner.md, docs/performance.md "HIL").
+# Builds the runner in Release first (build/hil-bench). Run it on an idle
+# machine: the figures are the machine's scheduling as much as the code's.
+#
+# Usage: scripts/hil_bench.sh [--seconds 60] [--rates 1000,10000] [--spin-us 50]
+#                             [--fifo 50] [--replay-seconds 60] [--no-python] [--out FILE.json]
+#   (options go to bench/hil_bench.py; --seconds 5 is a smoke run)
+# Environment: GEARSIM_PYTHON  the Python with gearsim installed (default: .venv).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+case "${1:-}" in -h|--help) sed -n '2,11p' "$0"; exit 0 ;; esac
+
+py=${GEARSIM_PYTHON:-.venv/bin/python}
+if [ ! -x "$py" ]; then
+  scripts/setup.sh
+  py=.venv/bin/python
+fi
+dir=build/hil-bench
+cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=OFF -DGEARSIM_BUILD_EXAMPLES=OFF \
+  -DGEARSIM_BUILD_BENCH=OFF -DGEARSIM_BUILD_HIL=ON -DGEARSIM_HIL_PYTHON="$PWD/$py" >/dev/null
+cmake --build "$dir" --target gearsim-hil -j "$(nproc 2>/dev/null || echo 2)" >/dev/null
+GEARSIM_HIL_RUNNER="$PWD/$dir/hil/gearsim-hil" exec "$py" bench/hil_bench.py "$@"
