@@ -4,11 +4,16 @@ python-can bus and records both directions into a log.
 Run the bridge in one shell and this in another, on an interface both
 processes share (SocketCAN `vcan0`/`can0`, or `udp_multicast` without AF_CAN):
 
-    gearsim hil run --model examples/hil/gear_model.toml -i socketcan -c vcan0
-    python examples/hil/host.py -i socketcan -c vcan0 --seconds 20 --log bench.blf
+    gearsim hil run --model examples/hil/gear_model.toml -i socketcan -c vcan0 --log rig.blf
+    python examples/hil/host.py -i socketcan -c vcan0 --seconds 20 --log host.blf
 
-    gearsim hil to-csv bench.blf --rig gear -o bench.csv
+    gearsim hil to-csv rig.blf --rig gear -o bench.csv
     gearsim compare bench.csv --model examples/hil/gear_model.toml
+
+Convert the bridge's own recording (rig.blf: stamped in rig time, so the CSV
+says at which step every command acted). This host's recording (host.blf) is
+stamped with its wall clock: to-csv resamples it and warns that the model
+cannot reproduce it step for step.
 
 The profile: base speed 20 sin(2 pi 0.25 t) + 5 rad/s (pinion: the same), load
 a slow square wave (gear 0.4 N*m, rack 40 N), a command every 10 ms.

@@ -78,9 +78,13 @@ def test_replay_and_to_csv(files: dict[str, Path], capsys: pytest.CaptureFixture
     assert main(["hil", "to-csv", str(out), "--rig", "gear", "-o", str(csv_path), "--json"]) == 0
     info = _one_json(capsys.readouterr().out)
     assert info["rows"] == 30 and info["columns"][0] == "time"
-    assert (
-        csv_path.read_text().splitlines()[0]
-        == "time,base_speed,load_torque,base_torque,follower_speed"
+    # the replay's answers are on its period grid: rows in rig time, inputs held
+    # at the rig's 1 ms step, said on the first line for the analysis
+    marker, header = csv_path.read_text().splitlines()[:2]
+    assert marker == "# gearsim hil to-csv: time_base=rig rig_dt=0.001 held=base_speed,load_torque"
+    assert header == (
+        "time,base_speed,load_torque,base_torque,follower_speed,"
+        "inputs_since,base_speed_before,load_torque_before"
     )
     # text output
     assert (

@@ -52,8 +52,25 @@ def test_gear_log_to_csv(tmp_path: Path, gear_dbc: RigDbc) -> None:
     out = tmp_path / "gear.csv"
     write_csv(out, rec.columns)
     header, data = _read_csv(out)
-    assert header == ["time", "base_speed", "load_torque", "base_torque", "follower_speed"]
+    assert header == [
+        "time",
+        "base_speed",
+        "load_torque",
+        "base_torque",
+        "follower_speed",
+        "inputs_since",
+        "base_speed_before",
+        "load_torque_before",
+    ]
     assert rec.dt == pytest.approx(0.01) and len(data) == 60
+    # the session is stamped in simulated time: rig time base, and every command
+    # (sent at the start of each 10 ms interval) was applied from the row before
+    assert rec.time_base == "rig" and rec.rig_dt == 1e-3
+    k_rows = np.rint(data[:, 0] / 1e-3).astype(int)
+    assert data[:, 5] == pytest.approx(data[:, 0] - 0.01, abs=1e-12)
+    # before each row's interval the rig held the previous command (none before 0)
+    prev = [round(_profile(int(j) - 20)["base_speed"], 3) if j >= 20 else 0.0 for j in k_rows]
+    assert data[:, 6] == pytest.approx(prev, abs=1e-9)
     assert np.diff(data[:, 0]) == pytest.approx(np.full(59, 0.01))
     assert data[0, 0] == pytest.approx(0.01) and data[-1, 0] == pytest.approx(0.6)
     # each row holds the feedback of that instant (the log's first frame is at t = 0)
@@ -62,11 +79,12 @@ def test_gear_log_to_csv(tmp_path: Path, gear_dbc: RigDbc) -> None:
         want = _series(gear_dbc, live, role)
         assert data[:, col].tolist() == [want[round(t, 9)] for t in data[:, 0]], role
 
-    # inputs from the commands instead: the command held at each instant
+    # inputs from the commands instead: the command the rig applied in the
+    # interval ending at each row, i.e. the one sent 10 periods before the row
     rec = log_to_measurement(log, gear_dbc, source="command")
     assert rec.sources["base_speed"] == "GearCmd.BaseSpeedCmd"
     k = np.rint(rec.columns["time"] / 1e-3).astype(int)
-    expected = [round(_profile(int(j))["base_speed"], 3) for j in k]
+    expected = [round(_profile(int(j) - 10)["base_speed"], 3) for j in k]
     assert rec.columns["base_speed"] == pytest.approx(expected, abs=1e-9)
 
 
@@ -116,9 +134,11 @@ def test_analysis_judges_the_model_against_the_recording(
     model = gear_model()
     log = tmp_path / "bench.blf"
     record_session(model, gear_dbc, log, _profile, periods=120, period=0.01, timeout=0.2)
-    rec = log_to_measurement(log, gear_dbc)
+    # to-csv is told the run's period: the rig was stepped every 10 ms
+    rec = log_to_measurement(log, gear_dbc, period=0.01)
+    assert rec.time_base == "rig" and rec.rig_dt == 0.01
     path = tmp_path / "bench.csv"
-    write_csv(path, rec.columns)
+    write_csv(path, rec)
     meas = analysis.load_measurement(str(path), "simple_gear")
     # noise-free data with step inputs: no input filter, so that the model sees what the rig saw
     result = analysis.compare(model, meas, input_filter=None)

@@ -196,7 +196,7 @@ def test_outputs_are_replaced_whole_and_leave_no_temporary_file(
     assert _run(capsys, "hil", "to-csv", work["log"], "--rig", "gear", "-o", csv_path)[0] == 0
     rc, _, err = _run(capsys, "hil", "replay", work["log"], "--model", work["model"], "-o", answers)
     assert rc == 0, err
-    assert csv_path.read_text().startswith("time,base_speed,")
+    assert csv_path.read_text().splitlines()[1].startswith("time,base_speed,")
     assert len(list(can.LogReader(str(answers)))) == 69
     assert sorted(p.name for p in d.iterdir()) == sorted(
         ["gear.toml", "rack.toml", "rec.blf", "data.csv", "answers.asc"]
@@ -280,7 +280,8 @@ def test_broken_pipe_ends_quietly(work: dict[str, Path]) -> None:
         stderr=subprocess.PIPE,
     )
     try:
-        head = [proc.stdout.readline(), proc.stdout.readline()]  # what `head -n 2` does
+        # what `head -n 3` does: the time-base line, the header, one row
+        head = [proc.stdout.readline() for _ in range(3)]
         proc.stdout.close()
         err = proc.stderr.read().decode()
         rc = proc.wait(timeout=120)
@@ -288,9 +289,12 @@ def test_broken_pipe_ends_quietly(work: dict[str, Path]) -> None:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
-    assert head[0] == b"time,base_speed,load_torque,base_torque,follower_speed\n"
-    assert head[1].count(b",") == 4
-    assert err == "", err  # no traceback, no "Exception ignored ... BrokenPipeError"
+    assert head[0] == b"# gearsim hil to-csv: time_base=wall\n"  # --dt resamples
+    assert head[1] == b"time,base_speed,load_torque,base_torque,follower_speed\n"
+    assert head[2].count(b",") == 4
+    # no traceback, no "Exception ignored ... BrokenPipeError": only the one line
+    # saying that a resampled CSV cannot reproduce the run
+    assert err.count("\n") == 1 and "warning: --dt 1e-05 s is not the feedback cycle" in err, err
     assert rc == hil_cli.EXIT_BROKEN_PIPE
 
 
@@ -304,9 +308,10 @@ def test_broken_pipe_through_head(work: dict[str, Path]) -> None:
         f'--dt 1e-5 -o - 2>"{work["dir"] / "err.txt"}" | head -n 2'
     )
     res = subprocess.run(["sh", "-c", cmd], capture_output=True, env=env, timeout=120)
-    assert res.stdout.decode().splitlines()[0].startswith("time,")
+    assert res.stdout.decode().splitlines()[1].startswith("time,")
     assert len(res.stdout.decode().splitlines()) == 2
-    assert (work["dir"] / "err.txt").read_text() == ""
+    err = (work["dir"] / "err.txt").read_text()  # the resampling warning, nothing else
+    assert err.count("\n") == 1 and "warning:" in err, err
 
 
 # -- 3. time jumps, mixed absolute and relative timestamps ---------------------------------
@@ -580,7 +585,7 @@ def test_messages_escape_user_data(work: dict[str, Path], capsys: pytest.Capture
     rc, text, err = _run(capsys, "hil", "to-csv", d / "ok\x1b.blf", "--rig", "gear", "-o", out)
     assert rc == 0, err
     assert "\x1b" not in text and "new\\nline.csv" in text.splitlines()[0]
-    assert out.read_text().startswith("time,")
+    assert out.read_text().splitlines()[1].startswith("time,")
     # a bad DBC path is echoed escaped as well
     rc, _, err = _run(
         capsys, "hil", "to-csv", work["log"], "--dbc", d / "no\x07such.dbc", "-o", d / "y.csv"

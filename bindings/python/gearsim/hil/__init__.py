@@ -38,6 +38,7 @@ _EXPORTS: dict[str, str] = {
     "BridgeError": "bridge",
     "Counters": "bridge",
     "LoopStats": "bridge",
+    "RigTimeRecorder": "bridge",
     "REJECT_REASONS": "bridge",
     "LATE_REASONS": "bridge",
     "IGNORE_REASONS": "bridge",
@@ -54,6 +55,7 @@ _EXPORTS: dict[str, str] = {
     "log_to_measurement": "recording",
     "write_csv": "recording",
     "Recording": "recording",
+    "INPUTS_SINCE": "recording",
     "RecordingError": "recording",
     "COLUMNS": "recording",
 }

@@ -25,6 +25,7 @@ period applies it, a valid command is *pending*;
 
 from __future__ import annotations
 
+import copy
 import math
 import threading
 import time
@@ -43,6 +44,7 @@ __all__ = [
     "Bridge",
     "Counters",
     "LoopStats",
+    "RigTimeRecorder",
     "BridgeError",
     "REJECT_REASONS",
     "LATE_REASONS",
@@ -140,6 +142,33 @@ class LoopStats:
                 lateness_max_us=float(late.max() * 1e6),
             )
         return out
+
+
+class RigTimeRecorder:
+    """Passes every frame a bridge receives and sends on to ``listener`` (e.g. a
+    can.Logger) stamped in *rig time*: ``origin`` + the bridge's simulated time.
+
+    A received frame is stamped with the start of the period that applies it,
+    a sent frame with the end of the period it answers; this is the time base
+    of ``replay`` (a frame at t acts on the period starting at t), so the
+    recording replays to the same answers, and ``to-csv`` knows at which step
+    every command took effect. The frames on the bus keep their own stamps.
+
+        recorder = RigTimeRecorder(bridge, logger.on_message_received, time.time())
+        bridge.add_listener(recorder)
+    """
+
+    def __init__(
+        self, bridge: Bridge, listener: Callable[[can.Message], Any], origin: float = 0.0
+    ) -> None:
+        self.bridge = bridge
+        self.listener = listener
+        self.origin = float(origin)
+
+    def __call__(self, msg: can.Message) -> None:
+        stamped = copy.copy(msg)
+        stamped.timestamp = self.origin + self.bridge.time
+        self.listener(stamped)
 
 
 class Bridge:
@@ -334,6 +363,10 @@ class Bridge:
             self._count("late", "superseded")
         self._pending[key] = (values, ts)
         return "pending"
+
+    def add_listener(self, listener: Callable[[can.Message], Any]) -> None:
+        """Give ``listener`` every frame received and sent from now on."""
+        self._listeners.append(listener)
 
     def _count(self, cls: str, reason: str) -> str:
         self.counters.count(cls, reason)

@@ -1,16 +1,22 @@
 """``gearsim hil``: run the bridge on a CAN bus, replay a log, turn a log into a
 measurement CSV (docs/hil.md).
 
-    gearsim hil run    --model M.toml [-i socketcan] [-c can0] [-b 500000] [--dbc F] ...
+    gearsim hil run    --model M.toml [-i IFACE] [-c CHANNEL] [-b BITRATE] [--dbc F] ...
+    gearsim hil run    --model M.toml --runner c [-i socketcan -c CHANNEL | -i candump] ...
     gearsim hil replay LOG --model M.toml [-o ANSWERS.asc] [--dbc F] ...
     gearsim hil to-csv LOG (--rig gear|rack | --dbc F | --model M.toml) -o DATA.csv ...
     gearsim hil dbc    gear|rack [-o FILE]
 
 Hooked into the ``gearsim`` command by gearsim/cli.py through
 :func:`add_subparsers`; :func:`main` runs it standalone
-(``python -m gearsim.hil``). Exit status: 0 success, 2 bad input (one line on
-standard error, no traceback), 1 internal failure (one line; the traceback only
-with GEARSIM_DEBUG set), 130 interrupted, 141 when standard output is a pipe
+(``python -m gearsim.hil``). ``run`` takes the bus from python-can's own
+configuration (can.util.load_config: the options, then CAN_INTERFACE,
+CAN_CHANNEL, CAN_BITRATE, CAN_CONFIG, then ~/.canrc and the other files);
+with nothing configured it exits with status 2 and says how.
+
+Exit status: 0 success, 2 bad input (one line on standard error, no
+traceback), 1 internal failure (one line; the traceback only with
+GEARSIM_DEBUG set), 130 interrupted, 141 when standard output is a pipe
 closed by its reader (``... -o - | head``; nothing printed). Without the hil
 extra (python-can, cantools) every command exits with status 2 and one line
 naming it: ``pip install 'gearsim[hil]'``. ``--json`` prints exactly one JSON
@@ -31,6 +37,7 @@ import os
 import signal
 import sys
 import threading
+import time
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
@@ -132,17 +139,50 @@ def _fill(parser: argparse.ArgumentParser) -> None:
     p.add_argument(
         "-i",
         "--interface",
-        default="socketcan",
-        help="python-can interface (socketcan, virtual, udp_multicast, pcan, ...; "
-        "default socketcan)",
+        help="python-can interface (socketcan, virtual, udp_multicast, pcan, ...; default: "
+        "python-can's configuration: CAN_INTERFACE, ~/.canrc, ...)",
     )
-    p.add_argument("-c", "--channel", default="can0", help="channel (default can0)")
+    p.add_argument(
+        "-c", "--channel", help="channel (default: python-can's configuration, CAN_CHANNEL)"
+    )
     p.add_argument(
         "-b",
         "--bitrate",
         type=int,
-        default=500000,
-        help="bit/s, for interfaces that set it (socketcan: set with ip link; default 500000)",
+        help="bit/s, for interfaces that set it (socketcan: set with ip link; default: "
+        "python-can's configuration, CAN_BITRATE)",
+    )
+    p.add_argument(
+        "--can-config",
+        metavar="FILE",
+        help="python-can configuration file to read instead of the default ones "
+        "(~/can.conf, /etc/can.conf, ~/.can, ~/.canrc)",
+    )
+    p.add_argument(
+        "--can-context",
+        metavar="NAME",
+        help="section of the python-can configuration to use (default: [default]; "
+        "environment: CAN_INTERFACE_NAME, ...)",
+    )
+    p.add_argument(
+        "--runner",
+        choices=("python", "c"),
+        default="python",
+        help="python: this process paces the model (default); c: start the C runner "
+        "gearsim-hil (docs/hil-runner.md)",
+    )
+    p.add_argument(
+        "--print-command",
+        action="store_true",
+        help="with --runner c: write the runner's parameter file and print the command "
+        "line instead of running it",
+    )
+    p.add_argument(
+        "--runner-params",
+        metavar="FILE",
+        help="with --runner c: where to write the runner's parameter file "
+        "(default: a temporary file; with --print-command: MODEL.hil-params in "
+        "the working directory)",
     )
     _model_options(p)
     p.add_argument(
@@ -153,6 +193,14 @@ def _fill(parser: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--log", metavar="FILE", help="record every frame received and sent (python-can Logger)"
+    )
+    p.add_argument(
+        "--log-time",
+        choices=("rig", "wall"),
+        default="rig",
+        help="timestamps of --log: rig (default: session start + simulated time, the "
+        "period that applied or sent each frame; replays and converts exactly) or wall "
+        "(the frames' own stamps)",
     )
     p.add_argument(
         "--spin",
@@ -216,6 +264,20 @@ def _fill(parser: argparse.ArgumentParser) -> None:
         type=float,
         metavar="S",
         help="grid step in seconds (default: longest cycle time of the frames used)",
+    )
+    p.add_argument(
+        "--period",
+        type=float,
+        default=1e-3,
+        metavar="S",
+        help="frame period of the run that made the log (default 0.001, as hil run)",
+    )
+    p.add_argument(
+        "--substeps",
+        type=int,
+        default=1,
+        metavar="N",
+        help="rig steps per period of that run (default 1, as hil run)",
     )
     p.add_argument(
         "--source",
@@ -395,28 +457,86 @@ def _inputs(args: argparse.Namespace, *names: str) -> list[str | None]:
     return [getattr(args, n, None) for n in names]
 
 
-def _cmd_run(args: argparse.Namespace) -> int:
+_NO_BUS_CONFIGURED = (
+    "no CAN interface configured: give -i/--interface and -c/--channel (e.g. -i socketcan "
+    "-c can0), set CAN_INTERFACE and CAN_CHANNEL, or write them in python-can's "
+    "configuration file ~/.canrc ([default] interface = socketcan, channel = can0)"
+)
+
+
+def _bus_config(args: argparse.Namespace) -> dict[str, Any]:
+    """The bus settings through python-can's own loader: the options given on
+    the command line, then the environment (CAN_INTERFACE, CAN_CHANNEL,
+    CAN_BITRATE, CAN_CONFIG), then the configuration files (--can-config, or
+    ~/can.conf, /etc/can.conf, ~/.can, ~/.canrc)."""
+    import can
+    from can.exceptions import CanInterfaceNotImplementedError
+
+    given = {
+        key: value
+        for key, value in (
+            ("interface", args.interface),
+            ("channel", args.channel),
+            ("bitrate", args.bitrate),
+        )
+        if value is not None
+    }
+    if args.can_config is not None and not Path(args.can_config).is_file():
+        raise _InputError(f"{_show(args.can_config)}: no such python-can configuration file")
+    try:
+        return dict(
+            can.util.load_config(path=args.can_config, config=given, context=args.can_context)
+        )
+    except CanInterfaceNotImplementedError as exc:
+        # python-can reports a missing interface as the unknown interface "None"
+        if "interface" not in given and '"None"' in str(exc):
+            raise _InputError(_NO_BUS_CONFIGURED) from None
+        raise _InputError(f"cannot open CAN bus: {one_line(exc)}") from None
+    except (ValueError, TypeError) as exc:  # a CAN_CONFIG that is not JSON, a bad port, ...
+        raise _InputError(f"python-can configuration: {one_line(exc)}") from None
+
+
+def _where(config: dict[str, Any]) -> str:
+    return f"{printable(str(config.get('interface')))}:{printable(str(config.get('channel')))}"
+
+
+def _open_bus(config: dict[str, Any]) -> Any:
     import can
 
-    from .bridge import Bridge
+    try:
+        return can.Bus(ignore_config=True, **config)
+    except (can.CanError, OSError, ValueError, TypeError, ImportError, NotImplementedError) as exc:
+        raise _InputError(f"cannot open CAN bus {_where(config)}: {one_line(exc)}") from None
 
+
+def _check_run_options(args: argparse.Namespace) -> None:
     _check_timing(args)
     if args.duration is not None and not args.duration >= 0:
         raise _InputError(f"--duration must be >= 0 s, got {args.duration!r}")
     if not args.max_lag > 0:
         raise _InputError(f"--max-lag must be > 0 s, got {args.max_lag!r}")
+    if args.runner != "c":
+        for option in ("print_command", "runner_params"):
+            if getattr(args, option):
+                raise _InputError(f"--{option.replace('_', '-')} needs --runner c")
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from .bridge import Bridge, RigTimeRecorder
+
+    _check_run_options(args)
+    if args.runner == "c":
+        return _run_c_runner(args)
     if args.log is not None:
         from .replay import log_writer_format
 
-        check_output(args.log, _inputs(args, "model", "dbc"), option="--log")
+        check_output(args.log, _inputs(args, "model", "dbc", "can_config"), option="--log")
         log_writer_format(args.log, option="--log")
     model = _load_model(args.model)
     dbc = _dbc_for(args, model.block)
-    where = f"{printable(args.interface)}:{printable(args.channel)}"
-    try:
-        bus = can.Bus(interface=args.interface, channel=args.channel, bitrate=args.bitrate)
-    except (can.CanError, OSError, ValueError, ImportError, NotImplementedError) as exc:
-        raise _InputError(f"cannot open CAN bus {where}: {one_line(exc)}") from None
+    config = _bus_config(args)
+    where = _where(config)
+    bus = _open_bus(config)
     logger = None
     stop = threading.Event()
     previous: dict[int, Any] = {}
@@ -426,21 +546,18 @@ def _cmd_run(args: argparse.Namespace) -> int:
         stop.set()
 
     try:
-        listeners = []
+        bridge = Bridge.from_model(
+            model, dbc, period=args.period, substeps=args.substeps, timeout=args.timeout, bus=bus
+        )
         if args.log is not None:
             from .replay import AtomicLogWriter
 
             logger = AtomicLogWriter(args.log, option="--log")
-            listeners.append(logger.on_message_received)
-        bridge = Bridge.from_model(
-            model,
-            dbc,
-            period=args.period,
-            substeps=args.substeps,
-            timeout=args.timeout,
-            bus=bus,
-            listeners=listeners,
-        )
+            record = logger.on_message_received
+            # rig time: the session's start on the wall clock + simulated time
+            bridge.add_listener(
+                record if args.log_time == "wall" else RigTimeRecorder(bridge, record, time.time())
+            )
         for sig in (signal.SIGINT, signal.SIGTERM):
             try:
                 previous[sig] = signal.signal(sig, on_signal)
@@ -485,6 +602,82 @@ def _cmd_run(args: argparse.Namespace) -> int:
         )
     _emit(args, summary, lines)
     return 0
+
+
+_BUILD_RUNNER = (
+    "the C runner gearsim-hil is not built: build it with CMake (on by default on Linux: "
+    "cmake -S . -B build -DGEARSIM_BUILD_HIL=ON && cmake --build build --target gearsim-hil; "
+    "docs/hil-runner.md)"
+)
+
+
+def _runner_transport(args: argparse.Namespace) -> dict[str, Any]:
+    """The C runner's transport: candump text on standard input and output
+    (``-i candump``), or SocketCAN from python-can's configuration."""
+    if args.interface == "candump":
+        return {"transport": "candump"}
+    config = _bus_config(args)
+    if config.get("interface") != "socketcan":
+        raise _InputError(
+            f"the C runner speaks SocketCAN or candump text on its standard input and output, "
+            f"not {_where(config)}: give -i socketcan -c CHANNEL or -i candump "
+            "(docs/hil-runner.md)"
+        )
+    return {"transport": "socketcan", "channel": config.get("channel") or "can0"}
+
+
+def _runner_command(runner: Any, params: str, args: argparse.Namespace) -> list[str]:
+    """The runner's command line for this run (gearsim.hil.runner.live_command)."""
+    cmd = runner.live_command(
+        params,
+        period=args.period,
+        substeps=args.substeps,
+        timeout=args.timeout,
+        duration=args.duration,
+        spin_us=round(max(0.0, args.spin) * 1e6),
+        json=args.json,
+        **_runner_transport(args),
+    )
+    return [str(part) for part in cmd]
+
+
+def _run_c_runner(args: argparse.Namespace) -> int:
+    """``hil run --runner c``: write the model as the runner's parameter file
+    and start gearsim-hil (or print its command line)."""
+    import shlex
+    import subprocess
+    import tempfile
+
+    try:
+        from . import runner
+    except ImportError:
+        raise _InputError(
+            "this installation has no C runner support (gearsim.hil.runner)"
+        ) from None
+    if args.log is not None or args.dbc is not None:
+        raise _InputError("--log and --dbc are options of the Python bridge (--runner python)")
+    if runner.find_runner() is None:
+        raise _InputError(_BUILD_RUNNER)
+    model = _load_model(args.model)
+    if args.print_command:
+        params = args.runner_params or f"{Path(args.model).stem}.hil-params"
+        check_output(params, _inputs(args, "model", "can_config"), option="--runner-params")
+        runner.write_params(model, params)
+        print(shlex.join(_runner_command(runner, params, args)))
+        return 0
+    with tempfile.TemporaryDirectory(prefix="gearsim-hil-") as tmp:
+        params = args.runner_params or os.path.join(tmp, "model.hil-params")
+        if args.runner_params:
+            check_output(params, _inputs(args, "model", "can_config"), option="--runner-params")
+        runner.write_params(model, params)
+        cmd = _runner_command(runner, params, args)
+        # Ctrl-C reaches the runner too (same process group); it stops cleanly and
+        # prints its counters, so this process only waits for it
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            return subprocess.call(cmd)
+        finally:
+            signal.signal(signal.SIGINT, previous)
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
@@ -534,6 +727,10 @@ def _cmd_to_csv(args: argparse.Namespace) -> int:
 
     if args.dt is not None and not (math.isfinite(args.dt) and args.dt > 0):
         raise _InputError(f"--dt must be a time > 0 s, got {args.dt!r}")
+    if not (math.isfinite(args.period) and args.period > 0):
+        raise _InputError(f"--period must be a time > 0 s, got {args.period!r}")
+    if args.substeps < 1:
+        raise _InputError(f"--substeps must be >= 1, got {args.substeps}")
     max_gap = _max_gap(args)
     max_samples = DEFAULT_MAX_SAMPLES if args.max_samples is None else args.max_samples
     if max_samples < 2:
@@ -557,14 +754,22 @@ def _cmd_to_csv(args: argparse.Namespace) -> int:
         temperature=args.temperature,
         max_gap=max_gap,
         max_samples=max_samples,
+        period=args.period,
+        substeps=args.substeps,
     )
+    for note in rec.notes:  # e.g. why this CSV cannot reproduce the run step for step
+        say(f"gearsim hil to-csv: warning: {one_line(note)}")
     if out == "-":
-        write_csv(sys.stdout, rec.columns)
+        write_csv(sys.stdout, rec)
         return 0
-    write_csv(out, rec.columns)  # atomic: a temporary file renamed over --out
+    write_csv(out, rec)  # atomic: a temporary file renamed over --out
     info = rec.info()
     info["out"] = out
-    lines = [f"wrote {rec.rows} rows every {rec.dt:g} s ({', '.join(rec.columns)}) to {_show(out)}"]
+    held = f", inputs held at the rig step {rec.rig_dt:g} s" if rec.time_base == "rig" else ""
+    lines = [
+        f"wrote {rec.rows} rows every {rec.dt:g} s ({', '.join(rec.columns)}) to {_show(out)} "
+        f"({rec.time_base} time{held})"
+    ]
     lines += [f"  {col:<16} from {printable(src)}" for col, src in rec.sources.items()]
     _emit(args, info, lines)
     return 0
