@@ -79,9 +79,68 @@ def test_diagnose_json(gear_csv):
             "load_offset",
         }
         assert finite(c["nrmse_after"]) and isinstance(c["parameters"], dict)
+        assert finite(c["score"]) and c["method"] in ("fit", "screening")
+        assert finite(c["validation_nrmse_after"]) and isinstance(c["helps"], bool)
     assert len({c["effect"] for c in cands}) == len(cands)
+    # fitted candidates first, each group by score unless a simpler one is within the noise
+    methods = [c["method"] for c in cands]
+    assert methods == sorted(methods, key=lambda m: m != "fit")
+    val = out["validation"]
+    assert val["enabled"] is True and val["fraction"] == pytest.approx(0.3)
+    assert val["held_out_blocks"] == [3, 6, 9] and finite(val["baseline_nrmse"])
+    assert cands[0]["helps"] and out["conclusion"].startswith("add coulomb_friction")
+    assert all({"kind", "text"} <= set(w) for w in out["warnings"])
     # progress went to stderr, not into the JSON
     assert "screen" in p.stderr
+
+
+def test_diagnose_text_shows_score_method_and_conclusion(gear_csv):
+    csv, model = gear_csv
+    p = run("diagnose", csv, "--model", model, "--quiet", "--no-validation")
+    assert p.returncode == 0, p.stderr
+    head = next(ln for ln in p.stdout.splitlines() if ln.startswith("rank"))
+    assert "score" in head and "method" in head and "validation" in head
+    assert "validation off" in p.stdout
+    assert p.stdout.rstrip().splitlines()[-1].startswith("add coulomb_friction")
+
+
+def test_validation_switch_and_fraction(gear_csv):
+    csv, model = gear_csv
+    on = one_json(
+        run("fit", csv, "--model", model, "--add", "coulomb_friction", "--json", "--quiet")
+    )
+    off = one_json(
+        run(
+            "fit",
+            csv,
+            "--model",
+            model,
+            "--add",
+            "coulomb_friction",
+            "--json",
+            "--quiet",
+            "--no-validation",
+        )
+    )
+    assert on["validation"]["enabled"] and not off["validation"]["enabled"]
+    # off: judged on the whole record
+    assert off["validation"]["nrmse_after"] == pytest.approx(off["nrmse_after"])
+    assert on["validation"]["nrmse_after"] < 0.5 * on["validation"]["nrmse_before"]
+    half = one_json(
+        run(
+            "diagnose",
+            csv,
+            "--model",
+            model,
+            "--json",
+            "--quiet",
+            "--no-fit",
+            "--validation-fraction",
+            "0.5",
+        )
+    )
+    assert half["validation"]["held_out_blocks"] == [1, 3, 5, 7, 9]
+    _bad(run("diagnose", csv, "--model", model, "--validation-fraction", "0.9"), "fraction")
 
 
 def test_diagnose_skips_effects_the_model_has(tmp_path, gear_csv):
@@ -129,6 +188,19 @@ def test_report(tmp_path, gear_csv):
     for name in ("overlay", "residual", "residual_vs", "regimes", "error_fall"):
         assert (out_dir / f"{name}.png").stat().st_size > 1000
     assert [r["effect"] for r in out["rounds"]] == [None, "coulomb_friction"]
+    r0, r1 = out["rounds"]
+    assert r1["validation_nrmse"] < 0.5 * r0["validation_nrmse"]
+    assert "validation" in html and "score" in html and "fails" in html
+
+
+def test_report_runs_rounds_by_default(tmp_path, gear_csv):
+    csv, model = gear_csv
+    out = one_json(run("report", csv, "--model", model, "--out", tmp_path / "r", "--json"))
+    # rounds until nothing helps (at most 3): coulomb friction first, then the stop line
+    assert out["rounds"][1]["effect"] == "coulomb_friction"
+    assert len(out["rounds"]) <= 4
+    if len(out["rounds"]) < 4:
+        assert out["conclusion"].startswith("nothing left that helps")
 
 
 # ---------------------------------------------------------------- bad input

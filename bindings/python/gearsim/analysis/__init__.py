@@ -63,12 +63,18 @@ def fit(
     *,
     input_filter="auto",
     max_samples: int | None = None,
+    validation: bool = True,
+    validation_fraction: float | None = None,
     progress=None,
 ) -> FitResult:
     """Add `effect` to `model`, fit it (and the parameters that trade off
     against it) on `meas`, and return the FitResult (its .model is the new
-    model). Raises EffectError for an unknown or inapplicable effect."""
+    model). validation: estimate on the estimation blocks and report the
+    error on the held-out ones (gearsim.analysis.scoring). Raises EffectError
+    for an unknown or inapplicable effect."""
+    from . import scoring
     from .effects import get_effect
+    from .fitting import fit_effect
     from .signatures import build_context
 
     get_effect(effect, model)
@@ -76,6 +82,6 @@ def fit(
         inputs = prepare_inputs(meas, input_filter)
     base = compare(model, meas, inputs)
     ctx = build_context(model, meas, inputs, base.sim, base.regime_masks)
-    from .fitting import fit_effect
-
-    return fit_effect(ctx, effect, max_samples=max_samples, progress=progress)
+    fraction = scoring.DEFAULT_FRACTION if validation_fraction is None else validation_fraction
+    split = scoring.split_record(meas.n, validation, fraction)
+    return fit_effect(ctx, effect, max_samples=max_samples, validation=split, progress=progress)

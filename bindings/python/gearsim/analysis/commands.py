@@ -101,6 +101,48 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
 
 
+def _fraction(text: str) -> float:
+    """argparse type: a held-out fraction in (0, 0.5]."""
+    try:
+        value = float(str(text).strip())
+    except ValueError:
+        value = float("nan")
+    if not (0.0 < value <= 0.5):
+        raise argparse.ArgumentTypeError(f"must be a fraction in (0, 0.5], got '{printable(text)}'")
+    return value
+
+
+_fraction.__name__ = "fraction in (0, 0.5]"
+
+
+def _validation_args(p: argparse.ArgumentParser) -> None:
+    from .scoring import DEFAULT_FRACTION
+
+    p.add_argument(
+        "--no-validation",
+        action="store_true",
+        help="estimate on the whole record and judge on it too (default: hold out "
+        "contiguous blocks and judge effects on them)",
+    )
+    p.add_argument(
+        "--validation-fraction",
+        type=_fraction,
+        default=DEFAULT_FRACTION,
+        metavar="F",
+        help=f"share of the record held out for validation, in (0, 0.5] (default "
+        f"{DEFAULT_FRACTION:g}: 3 of 10 contiguous blocks)",
+    )
+
+
+def _validation(args: argparse.Namespace) -> dict[str, Any]:
+    return {"validation": not args.no_validation, "validation_fraction": args.validation_fraction}
+
+
+def _print_warnings(warnings: list[dict]) -> None:
+    for w in warnings:
+        print(f"warning: {w['text']}")
+
+
 def _progress(args: argparse.Namespace):
     if getattr(args, "quiet", False):
         return lambda msg: None
@@ -294,9 +336,12 @@ def _print_compare(res) -> None:
 def _print_regimes(res) -> None:
     if not res.regimes:
         return
+    from .regimes import FAILING_RATIO
+
     outs = list(res.outputs)
     print(
-        "\nerror by regime (rms residual in the regime / std of the output; x = ratio to overall):"
+        "\nerror by regime (rms residual in the regime / std of the output; x = ratio to "
+        f"overall; a regime fails at >= {FAILING_RATIO:g}x):"
     )
     print(f"{'regime':20s} {'share':>6s} " + " ".join(f"{o:>22s}" for o in outs))
     for r in res.regimes:
@@ -304,7 +349,7 @@ def _print_regimes(res) -> None:
         for o in outs:
             e = r["outputs"][o]
             cells.append(f"{_g(e['nrmse']):>10s} ({_g(e['ratio']):>5s}x)   ")
-        flag = "  <- fails" if r["failing"] else ""
+        flag = f"  <- fails (>= {FAILING_RATIO:g}x)" if r["failing"] else ""
         print(f"{r['regime']:20s} {100 * r['fraction']:5.1f}% " + " ".join(cells) + flag)
 
 
@@ -328,42 +373,69 @@ def _compare(args: argparse.Namespace) -> int:
 
 def _diagnose_args(p: argparse.ArgumentParser) -> None:
     _common(p)
+    _validation_args(p)
     p.add_argument(
         "--top",
         type=_count(1),
-        default=3,
+        default=None,
         metavar="N",
-        help="fit the N best screened candidates on the simulation (default 3)",
+        help="fit only the N best candidates by screening (default: every candidate the "
+        "screening does not rule out)",
     )
     p.add_argument(
         "--no-fit", action="store_true", help="screening only (fast; errors after are estimates)"
     )
 
 
+def _param_text(parameters: dict) -> str:
+    def one(v: Any) -> str:
+        return "[" + ", ".join(_g(x) for x in v) + "]" if isinstance(v, list) else _g(v)
+
+    return ", ".join(f"{k}={one(v)}" for k, v in parameters.items())
+
+
 def _print_diagnose(res) -> None:
-    print(
-        f"baseline nrmse {res.baseline_nrmse:.4f} "
-        f"(re-estimating the present parameters alone: {res.reestimate_nrmse:.4f})"
+    val = res.validation
+    held = (
+        f"validation on {100 * val.fraction:.0f} % held out (blocks "
+        f"{', '.join(map(str, val.blocks))} of 10)"
+        if val.enabled
+        else "validation off: judged on the whole record"
     )
+    print(
+        f"baseline nrmse {res.baseline_nrmse:.4f}, validation nrmse "
+        f"{res.validation_baseline_nrmse:.4f}, score {res.baseline_score:.1f}; {held}"
+    )
+    print(f"re-estimating the present parameters alone: nrmse {res.reestimate_nrmse:.4f}")
     fails = res.baseline.failing_regimes
-    if fails:
-        print(
-            "failing regimes: "
-            + ", ".join(f"{r['regime']} ({r['worst_ratio']:.1f}x)" for r in fails)
-        )
-    else:
-        print("failing regimes: none stands out")
-    print(f"\n{'rank':4s} {'effect':34s} {'nrmse after':>11s} {'how':>9s}  parameters")
+    from .regimes import FAILING_RATIO
+
+    print(
+        f"failing regimes (>= {FAILING_RATIO:g}x the overall error): "
+        + (", ".join(f"{r['regime']} ({r['worst_ratio']:.2f}x)" for r in fails) or "none")
+    )
+    print(
+        f"\n{'rank':4s} {'effect':34s} {'score':>11s} {'method':>18s} {'nrmse after':>11s} "
+        f"{'validation':>10s} {'helps':>5s}  parameters"
+    )
     for i, c in enumerate(res.candidates, 1):
-        params = ", ".join(
-            f"{k}={_g(v) if not isinstance(v, list) else '[' + ', '.join(_g(x) for x in v) + ']'}"
-            for k, v in c.parameters.items()
+        method = "fit" if c.method == "fit" else "screening estimate"
+        print(
+            f"{i:4d} {c.effect:34s} {c.score:11.1f} {method:>18s} {c.nrmse_after:11.4f} "
+            f"{c.validation_nrmse_after:10.4f} {'yes' if c.helps else 'no':>5s}  "
+            f"{_param_text(c.parameters)}"
         )
-        print(f"{i:4d} {c.effect:34s} {c.nrmse_after:11.4f} {c.method:>9s}  {params}")
+        if c.tied_with:
+            print(f"{'':5s}within the noise of: {', '.join(c.tied_with)} (simpler listed first)")
         if c.evidence.get("text"):
             print(f"{'':5s}evidence: {c.evidence['text']}")
+    print("(sorted by score, lower is better; screening estimates follow the fitted candidates)")
     if res.skipped:
         print("\nnot candidates: " + "; ".join(f"{k} ({v})" for k, v in res.skipped.items()))
+    if res.warnings:
+        print()
+    _print_warnings(res.warnings)
+    print(f"\n{res.conclusion}")
 
 
 def _diagnose(args: argparse.Namespace) -> int:
@@ -372,7 +444,15 @@ def _diagnose(args: argparse.Namespace) -> int:
     say = _progress(args)
     filt = _input_filter(args.input_filter)
     model, meas = _load(args, filt)
-    res = diagnose(model, meas, input_filter=filt, top=args.top, fit=not args.no_fit, progress=say)
+    res = diagnose(
+        model,
+        meas,
+        input_filter=filt,
+        top=args.top,
+        fit=not args.no_fit,
+        progress=say,
+        **_validation(args),
+    )
     if args.json:
         _emit_json(res.to_json())
     else:
@@ -384,14 +464,14 @@ def _diagnose(args: argparse.Namespace) -> int:
 
 
 def _fit_args(p: argparse.ArgumentParser) -> None:
+    from .effects import EFFECT_NAMES
+
     _common(p)
     p.add_argument(
         "--add",
         required=True,
         metavar="EFFECT",
-        help="effect to add: meshing_efficiency, load_dependent_efficiency, "
-        "temperature_dependent_efficiency, viscous_friction, backlash, coulomb_friction, "
-        "load_offset",
+        help=f"effect to add: {', '.join(EFFECT_NAMES)}",
     )
     p.add_argument(
         "--out",
@@ -399,6 +479,7 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
         help="write the model with the effect added and fitted (atomically, after the fit; "
         "never over DATA.csv or MODEL.toml)",
     )
+    _validation_args(p)
     p.add_argument(
         "--max-samples",
         type=_count(1),
@@ -420,8 +501,12 @@ def _print_fit(res) -> None:
         )
     for name, m in res.outputs_after.items():
         print(f"  {name}: nrmse {res.outputs_before[name].nrmse:.4f} -> {m.nrmse:.4f}")
-    for w in res.warnings:
-        print(f"warning: {w}")
+    where = "held-out blocks" if res.validation.enabled else "whole record (validation off)"
+    print(
+        f"  validation ({where}): nrmse {res.validation_nrmse_before:.4f} -> "
+        f"{res.validation_nrmse_after:.4f}"
+    )
+    _print_warnings(res.warnings)
     for n in res.notes:
         print(f"note: {n}")
 
@@ -436,7 +521,15 @@ def _fit(args: argparse.Namespace) -> int:
     filt = _input_filter(args.input_filter)
     # an unknown / inapplicable effect: exit 2 before any work
     model, meas = _load(args, filt, check=lambda m: get_effect(args.add, m))
-    res = fit(model, meas, args.add, input_filter=filt, max_samples=args.max_samples, progress=say)
+    res = fit(
+        model,
+        meas,
+        args.add,
+        input_filter=filt,
+        max_samples=args.max_samples,
+        progress=say,
+        **_validation(args),
+    )
     if args.out is not None:
         _write_model_atomic(res.model, args.out)
         say(f"wrote {printable(args.out, limit=200)}")
@@ -462,13 +555,14 @@ def _report_args(p: argparse.ArgumentParser) -> None:
         help="directory for report.html and the PNG files (created if missing, in an existing "
         "directory; files of the same name in it are replaced, inputs never)",
     )
+    _validation_args(p)
     p.add_argument(
         "--rounds",
         type=_count(0),
-        default=0,
+        default=3,
         metavar="N",
-        help="rounds of diagnose -> fit the best effect before drawing (default 0: the "
-        "model as is)",
+        help="at most N rounds of diagnose -> add the best effect when it helps, before "
+        "drawing (default 3; 0: the model as is)",
     )
     p.add_argument("--title", default=None, help="title of the HTML page")
     p.add_argument(
@@ -486,7 +580,9 @@ def _report(args: argparse.Namespace) -> int:
     say = _progress(args)
     filt = _input_filter(args.input_filter)
     model, meas = _load(args, filt)
-    rounds = run_rounds(model, meas, rounds=args.rounds, input_filter=filt, progress=say)
+    rounds = run_rounds(
+        model, meas, rounds=args.rounds, input_filter=filt, progress=say, **_validation(args)
+    )
     paths = write_report(
         args.out,
         meas,
@@ -501,16 +597,29 @@ def _report(args: argparse.Namespace) -> int:
         "report": paths["html"],
         "images": paths["images"],
         "rounds": [
-            {"round": i, "effect": r.effect, "nrmse": r.compare.nrmse} for i, r in enumerate(rounds)
+            {
+                "round": i,
+                "effect": r.effect,
+                "nrmse": r.compare.nrmse,
+                "estimation_nrmse": r.estimation_nrmse,
+                "validation_nrmse": r.validation_nrmse,
+                "warnings": [dict(w) for w in (r.fit.warnings if r.fit else [])],
+            }
+            for i, r in enumerate(rounds)
         ],
+        "conclusion": rounds[-1].diagnosis.conclusion if rounds[-1].diagnosis else None,
     }
     if args.json:
         _emit_json(summary)
     else:
         for s in summary["rounds"]:
             print(
-                f"round {s['round']}: {s['effect'] or 'model as given':34s} nrmse {s['nrmse']:.4f}"
+                f"round {s['round']}: {s['effect'] or 'model as given':34s} nrmse "
+                f"{s['nrmse']:.4f}, validation {s['validation_nrmse']:.4f}"
             )
+            _print_warnings(s["warnings"])
+        if summary["conclusion"]:
+            print(summary["conclusion"])
         print(f"wrote {printable(paths['html'], limit=200)}")
     return 0
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from .measurement import Measurement
 from .metrics import OutputMetrics, output_metrics
-from .regimes import Regime, regime_errors, segment
+from .regimes import FAILING_RATIO, Regime, regime_errors, segment
 from .simulate import Inputs, Simulation, prepare_inputs, simulate
 
 __all__ = ["CompareResult", "compare"]
@@ -62,6 +62,7 @@ class CompareResult:
             "input_filter_hz": dict(self.inputs.cutoffs),
             "regimes": self.regimes,
             "failing_regimes": [r["regime"] for r in self.failing_regimes],
+            "failing_ratio": FAILING_RATIO,
         }
 
 

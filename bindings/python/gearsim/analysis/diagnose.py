@@ -3,19 +3,19 @@
 1. compare: the baseline error, overall and per regime (which regimes fail).
 2. screen: for every effect the model lacks, regress the driven-side residual
    on the effect's signature columns plus those of the parameters that would
-   be re-estimated with it (gearsim.analysis.signatures). This predicts the
-   error after fitting, seeds the fit and gives the evidence (correlation with
-   the signature, coefficients, the regime where the effect shows most).
-   Backlash is screened by the concentration of the residual after torque
-   reversals and the gap the driven-speed residual integrates to.
-3. fit: the best few screened candidates (``top``, plus backlash when its
-   evidence is strong) are added and fitted on the C simulation
-   (gearsim.analysis.fitting), which gives their error after fitting.
-4. rank: by error after fitting, with a 3 % handicap per extra parameter so
-   that an effect with more parameters (load- or temperature-dependent
-   efficiency) only ranks above a simpler one that fits as well when it
-   explains clearly more. Candidates that were only screened follow the
-   fitted ones.
+   be re-estimated with it (gearsim.analysis.signatures). This seeds the fit
+   and gives the evidence. Screening rules an effect out only when the record
+   cannot show it (backlash without concentrated driven-speed residual after
+   reversals, a temperature dependence without a temperature span).
+3. fit: every candidate not ruled out (or the best ``top`` by screening) is
+   added and fitted on the C simulation on the estimation blocks
+   (gearsim.analysis.fitting), which gives its errors on the whole record
+   and on the validation blocks.
+4. rank: by the score of gearsim.analysis.scoring (a BIC on the estimation
+   part with an effective sample count); fitted candidates first, screening
+   estimates after them; within the noise, fewer parameters first.
+5. conclude: the best candidate helps (scoring.helps, the rule the report's
+   rounds use too), or "nothing left that helps".
 """
 
 from __future__ import annotations
@@ -25,26 +25,28 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
-from . import modelkit as mk
+from . import scoring
 from .compare import CompareResult, compare
-from .effects import EFFECTS, Effect, applicable_effects, nuisance_columns, present_mesh_loss
-from .fitting import FitResult, fit_effect, screen_effect
+from .effects import Effect, applicable_effects, coestimated, nuisance_columns
+from .fitting import FitResult, fit_effect
+from .identifiability import tie_warning
 from .measurement import Measurement
-from .signatures import BacklashEvidence, Context, ScreenResult, build_context, screen
+from .regimes import FAILING_RATIO
+from .signatures import Context, build_context, screen
 from .simulate import Inputs, prepare_inputs
 
-__all__ = ["Candidate", "DiagnoseResult", "diagnose", "PARAMETER_HANDICAP"]
+__all__ = ["Candidate", "DiagnoseResult", "diagnose", "NOTHING_HELPS"]
 
-PARAMETER_HANDICAP = 0.03
-BACKLASH_STRENGTH = 1.5
+NOTHING_HELPS = "nothing left that helps"
 
 
 @dataclass
 class Candidate:
-    """One missing effect: its error after being added, the parameters, how
-    that was found ("fit" or "screening") and the evidence from the residual."""
+    """One missing effect: its errors after being added (whole record and
+    validation blocks), its score, the parameters, how that was found
+    (method "fit" or "screening": a screening estimate, not fitted) and the
+    evidence from the residual. helps: the stopping rule's verdict;
+    tied_with: candidates within the noise of it."""
 
     effect: str
     nrmse_after: float
@@ -54,22 +56,35 @@ class Candidate:
     score: float
     screen_nrmse: float
     fit: FitResult | None = None
+    validation_nrmse_after: float = float("nan")
+    n_parameters: int = 1
+    judged_mse: dict[str, float] = field(default_factory=dict)
+    helps: bool = False
+    tied_with: list[str] = field(default_factory=list)
+
+    @property
+    def warnings(self) -> list[dict]:
+        return list(self.fit.warnings) if self.fit is not None else []
 
     def to_json(self) -> dict:
         out = {
             "effect": self.effect,
-            "nrmse_after": self.nrmse_after,
-            "parameters": self.parameters,
-            "method": self.method,
-            "screen_nrmse": self.screen_nrmse,
             "score": self.score,
+            "method": self.method,
+            "nrmse_after": self.nrmse_after,
+            "validation_nrmse_after": self.validation_nrmse_after,
+            "parameters": self.parameters,
+            "n_parameters": self.n_parameters,
+            "helps": self.helps,
+            "within_noise_of": list(self.tied_with),
+            "screen_nrmse": self.screen_nrmse,
             "evidence": self.evidence,
+            "warnings": [dict(w) for w in self.warnings],
         }
         if self.fit is not None:
             out["coestimated"] = {
                 f["name"]: f["value"] for f in self.fit.fitted if f["role"] == "coestimated"
             }
-            out["warnings"] = list(self.fit.warnings)
         return out
 
 
@@ -81,6 +96,12 @@ class DiagnoseResult:
     skipped: dict[str, str]
     reestimate_nrmse: float
     seconds: float
+    validation: scoring.ValidationSplit
+    validation_baseline_nrmse: float
+    baseline_score: float
+    effective_samples: dict[str, float]
+    tie_relative: float = scoring.TIE_RELATIVE
+    warnings: list[dict] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
 
     @property
@@ -91,12 +112,39 @@ class DiagnoseResult:
     def best(self) -> Candidate | None:
         return self.candidates[0] if self.candidates else None
 
+    @property
+    def best_helps(self) -> bool:
+        return bool(self.best is not None and self.best.helps)
+
+    @property
+    def conclusion(self) -> str:
+        b = self.best
+        if b is not None and b.helps:
+            return (
+                f"add {b.effect}: validation nrmse {self.validation_baseline_nrmse:.4g} -> "
+                f"{b.validation_nrmse_after:.4g}, score {self.baseline_score:.1f} -> {b.score:.1f}"
+            )
+        return (
+            f"{NOTHING_HELPS}: no fitted candidate lowers the validation error by "
+            f"{100 * scoring.HELP_MARGIN:.0f} % and the score"
+        )
+
     def to_json(self) -> dict:
         return {
             "baseline_nrmse": self.baseline.nrmse,
             "candidates": [c.to_json() for c in self.candidates],
+            "validation": {
+                **self.validation.to_json(),
+                "baseline_nrmse": self.validation_baseline_nrmse,
+            },
+            "warnings": [dict(w) for w in self.warnings],
+            "conclusion": self.conclusion,
+            "baseline_score": self.baseline_score,
+            "effective_samples": dict(self.effective_samples),
+            "tie": {"score": scoring.TIE_SCORE, "relative_validation": self.tie_relative},
             "reestimate_only_nrmse": self.reestimate_nrmse,
             "baseline_outputs": {k: v.nrmse for k, v in self.baseline.outputs.items()},
+            "failing_ratio": FAILING_RATIO,
             "failing_regimes": [
                 {
                     "regime": r["regime"],
@@ -113,155 +161,160 @@ class DiagnoseResult:
         }
 
 
-def _fmt(x: float) -> str:
-    return f"{x:.4g}"
+# ---------------------------------------------------------------- screening
 
 
-def _own_regime(ctx: Context, part: np.ndarray) -> tuple[str | None, float]:
-    """The regime where an effect's contribution is largest relative to its
-    overall rms."""
-    tot = float(np.sqrt(np.mean(part**2)))
-    best, ratio = None, 0.0
-    if tot <= 0:
-        return None, 0.0
-    for reg in ctx.regimes:
-        if reg.mask.sum() < max(10, 0.01 * reg.mask.size):
-            continue
-        r = float(np.sqrt(np.mean(part[reg.mask] ** 2))) / tot
-        if r > ratio:
-            best, ratio = reg.name, r
-    return best, ratio
+@dataclass
+class _Screened:
+    effect: Effect
+    result: Any
+    predicted: float
+    evidence: dict[str, Any]
+    ruled_out: str | None
 
 
-def _evidence_linear(ctx: Context, effect: Effect, sr: ScreenResult) -> dict[str, Any]:
-    unit = ctx.meas.spec.driven_force_unit
-    nn = sr.nuisance
-    own = {n: float(c) for n, c in zip(sr.names[nn:], sr.coef[nn:], strict=True)}
-    regime, ratio = _own_regime(ctx, sr.explained)
-    ev: dict[str, Any] = {
-        "signature": effect.signature_text,
-        "correlation": sr.partial_r,
-        "explained_share": sr.r2_gain,
-        "coefficients": own,
-        "regime": regime,
-        "regime_ratio": ratio,
+def _screen_all(ctx: Context, effects: list[Effect], nuisance_nrmse: float) -> list[_Screened]:
+    """Screen every candidate; sorted by the error screening predicts."""
+    out = []
+    for eff in effects:
+        sr = eff.screen(ctx)
+        why = eff.ruled_out(ctx, sr)
+        ev = eff.evidence(ctx, sr)
+        if why:
+            ev["ruled_out"] = why
+            ev["text"] = f"{ev.get('text', '')} (not fitted: {why})".strip()
+        pred = nuisance_nrmse if why else eff.predicted_nrmse(ctx, sr)
+        out.append(_Screened(eff, sr, pred, ev, why))
+    return sorted(out, key=lambda s: s.predicted)
+
+
+def _screen_parameters(ctx: Context, eff: Effect, sr: Any) -> dict[str, Any]:
+    """The effect's parameters as the screening seeds them (not fitted), in
+    the same form as a fitted candidate's (program names, model values)."""
+    from ..errors import GearsimError
+    from . import modelkit as mk
+
+    seeds = {p.name: p.clipped_x0() for p in eff.parameters(ctx, sr)}
+    try:
+        block, rig = eff.build(ctx, seeds)
+        return eff.report(mk.changed(ctx.model, block, rig))
+    except (GearsimError, ValueError, KeyError):  # a seed the block refuses: the raw seeds
+        return seeds
+
+
+def _screening_candidate(ctx: Context, s: _Screened, split: scoring.ValidationSplit) -> Candidate:
+    """A candidate judged on screening alone: its errors and score are
+    estimates from the linear regression, not from a simulation."""
+    torque, speed = ctx.torque_output, ctx.speed_output
+    tn = getattr(s.result, "torque_nrmse", ctx.base_nrmse[torque])
+    mse = {
+        torque: float(tn) ** 2,
+        speed: scoring.normalized_mse(ctx.residual[speed], ctx.std[speed], split.validation),
     }
-    n = effect.name
-    r = sr.partial_r
-    if abs(r) < 0.1 or not np.any(sr.explained):
-        ev["text"] = (
-            f"no sign of it in the residual: {effect.signature_text} is not seen "
-            f"(partial correlation r = {r:.2f})"
-        )
-        return ev
-    if n == "coulomb_friction":
-        fc = own.get("sign", 0.0)
-        ev["text"] = (
-            f"residual follows sign(speed) (r = {r:.2f}): a step of 2 x {_fmt(fc)} {unit} at each "
-            f"direction reversal; largest in {regime}"
-        )
-    elif n == "viscous_friction":
-        ev["text"] = (
-            f"residual grows in proportion to speed (r = {r:.2f}, slope "
-            f"{_fmt(own.get('speed', 0.0))} "
-            f"{unit} per {ctx.meas.spec.driven_speed_unit} of driven speed); largest in {regime}"
-        )
-    elif n == "load_offset":
-        bias = -own.get("constant", 0.0)
-        per = []
-        for reg in ctx.regimes:
-            if reg.mask.any() and reg.name in (
-                "driving",
-                "overrunning",
-                "direction_reversal",
-                "high_speed",
-            ):
-                per.append(f"{reg.name} {_fmt(float(np.mean(ctx.r_d[reg.mask])))}")
-        ev["text"] = (
-            f"constant bias of the driven-side residual: {_fmt(bias)} {unit} of missing load "
-            f"offset (r = {r:.2f}); mean residual by regime: {', '.join(per)}"
-        )
-    elif n == "meshing_efficiency":
-        ev.update(_flow_split(ctx))
-        ev["text"] = (
-            f"residual proportional to |transmitted torque| x sign(speed) (r = {r:.2f}): "
-            "loss factor "
-            f"{_fmt(ev.get('loss_factor_driving', float('nan')))} while driving, "
-            f"{_fmt(ev.get('loss_factor_overrunning', float('nan')))} while overrunning "
-            f"(efficiency ~ {_fmt(1.0 - own.get('mesh', 0.0))}); largest in {regime}"
-        )
-    elif n == "load_dependent_efficiency":
-        idle = own.get("idle", 0.0)
-        k = own.get("mesh", 0.0)
-        tmax = float(np.percentile(np.abs(ctx.T), 95)) or 1.0
-        eff = {}
-        for frac in (0.1, 1.0):
-            t = frac * tmax
-            eff[f"{int(frac * 100)}%"] = t / (t + idle + k * t) if t > 0 else float("nan")
-        ev["efficiency_at_load"] = eff
-        ev["text"] = (
-            f"loss = {_fmt(idle)} {unit} at no load + {_fmt(k)} x |transmitted torque| (r = "
-            f"{r:.2f}): "
-            f"efficiency {_fmt(eff['10%'])} at 10 % of the peak load vs {_fmt(eff['100%'])} at "
-            f"the peak; largest in {regime}"
-        )
-    elif n == "temperature_dependent_efficiency":
-        L0 = present_mesh_loss(ctx.model)
-        pts = []
-        for name, c in own.items():
-            pts.append(f"{1.0 - (L0 + c):.3f} at {name.split('@')[1]}")
-        span = float(np.ptp(ctx.temperature))
-        ev["temperature_span_K"] = span
-        ev["temperature_source"] = ctx.temperature_source
-        ev["text"] = (
-            f"the torque-proportional loss changes with temperature (r = {r:.2f}): efficiency "
-            f"{', '.join(pts)} ({ctx.temperature_source} temperature spans {span:.1f} K); largest "
-            f"in {regime}"
-        )
-    return ev
+    k = len(s.effect.parameters(ctx, s.result)) + len(coestimated(ctx, s.effect, s.result))
+    return Candidate(
+        s.effect.name,
+        s.predicted,
+        _screen_parameters(ctx, s.effect, s.result),
+        "screening",
+        s.evidence,
+        float("nan"),
+        s.predicted,
+        None,
+        validation_nrmse_after=s.predicted,
+        n_parameters=k,
+        judged_mse=mse,
+    )
 
 
-def _flow_split(ctx: Context) -> dict[str, float]:
-    """Mesh-loss coefficient fitted separately where the drive drives the load
-    and where the load overruns (power-flow direction)."""
-    x = ctx.columns["mesh"]
-    y = ctx.r_d
-    # remove the inertia part first
-    a = ctx.columns["acceleration"]
-    p = ctx.T * ctx.v
-    out = {}
-    for name, m in (("driving", p < 0), ("overrunning", p > 0)):
-        if m.sum() < 20:
-            continue
-        A = np.column_stack([x[m], a[m]])
-        coef, *_ = np.linalg.lstsq(A, y[m], rcond=None)
-        out[f"loss_factor_{name}"] = float(coef[0])
-    return out
+def _fitted_candidate(
+    ctx: Context,
+    s: _Screened,
+    split: scoring.ValidationSplit,
+    say: Callable[[str], None],
+    notes: list[str],
+) -> Candidate | None:
+    say(f"fit: {s.effect.name} (screening predicts nrmse {s.predicted:.4f})")
+    try:
+        fr = fit_effect(
+            ctx,
+            s.effect.name,
+            screen_result=s.result,
+            max_nfev=20 * (s.effect.n_params + 2),
+            validation=split,
+        )
+    except Exception as exc:  # a candidate that cannot be fitted is reported, not fatal
+        notes.append(f"{s.effect.name}: fit failed ({exc}); screening estimate kept")
+        return None
+    return Candidate(
+        s.effect.name,
+        fr.nrmse_after,
+        fr.parameters,
+        "fit",
+        s.evidence,
+        float("nan"),
+        s.predicted,
+        fr,
+        validation_nrmse_after=fr.validation_nrmse_after,
+        n_parameters=fr.n_parameters,
+        judged_mse=dict(fr.judged_mse),
+    )
 
 
-def _evidence_backlash(ctx: Context, be: BacklashEvidence) -> dict[str, Any]:
-    ms = be.window * ctx.meas.dt * 1e3
-    conc = {k: float(v) for k, v in be.concentration.items()}
-    so = ctx.speed_output
+# ---------------------------------------------------------------- scoring
+
+
+def _effective_samples(
+    ctx: Context, cands: list[Candidate], split: scoring.ValidationSplit
+) -> dict[str, float]:
+    """Per output, n_eff from the residual of the best-fitting candidate
+    (lowest estimation error), else of the baseline."""
+    fitted = [c for c in cands if c.fit is not None]
+    if fitted:
+        best = min(fitted, key=lambda c: sum(c.judged_mse.values()))
+        residual = best.fit.residual_after
+    else:
+        residual = ctx.residual
+    n = int(split.validation.sum())
     return {
-        "signature": EFFECTS["backlash"].signature_text,
-        "reversals": int(be.events.size),
-        "window_ms": ms,
-        "time_fraction": be.time_fraction,
-        "concentration": conc,
-        "gap_estimate_m": be.gap_estimate,
-        "regime": "torque_reversal",
-        "text": (
-            f"{100 * be.time_fraction:.1f} % of the time (the {ms:.0f} ms after "
-            f"{be.events.size} torque "
-            f"reversals) holds {conc.get(so, 0) * be.time_fraction * 100:.0f} % of the {so} "
-            "residual "
-            f"energy ({conc.get(so, 0):.1f}x its share) and "
-            f"{conc.get(ctx.torque_output, 0) * be.time_fraction * 100:.0f} % of the "
-            f"{ctx.torque_output} residual energy; the {so} residual integrates to a gap of "
-            f"{be.gap_estimate * 1e3:.3g} mm"
-        ),
+        o: scoring.effective_samples(n, scoring.lag1_autocorrelation(r[split.validation]))
+        for o, r in residual.items()
     }
+
+
+def _score_all(
+    ctx: Context, cands: list[Candidate], split: scoring.ValidationSplit
+) -> tuple[float, dict[str, float]]:
+    """Set every candidate's score; return the baseline's score and n_eff."""
+    n_eff = _effective_samples(ctx, cands, split)
+    outputs = list(n_eff)
+    for c in cands:
+        c.score = scoring.bic_score(
+            [c.judged_mse[o] for o in outputs], [n_eff[o] for o in outputs], c.n_parameters
+        )
+    base_mse = [
+        scoring.normalized_mse(ctx.residual[o], ctx.std[o], split.validation) for o in outputs
+    ]
+    return scoring.bic_score(base_mse, [n_eff[o] for o in outputs], 0), n_eff
+
+
+def _warnings(ranked: list[Candidate]) -> list[dict]:
+    """Ties among the candidates that help, then the fit warnings of the best
+    one when it helps (those of a rejected candidate would only be noise)."""
+    out = []
+    by_name = {c.effect: c for c in ranked}
+    seen: set[frozenset] = set()
+    for c in ranked:
+        if not c.helps:
+            continue
+        for other in c.tied_with:
+            pair = frozenset((c.effect, other))
+            if pair not in seen:
+                seen.add(pair)
+                out.append(tie_warning(c, by_name[other]))
+    if ranked and ranked[0].helps and ranked[0].fit is not None:
+        out += [{**w, "candidate": ranked[0].effect} for w in ranked[0].warnings]
+    return out
 
 
 def diagnose(
@@ -270,11 +323,14 @@ def diagnose(
     inputs: Inputs | None = None,
     *,
     input_filter: float | str | None = "auto",
-    top: int = 3,
+    top: int | None = None,
     fit: bool = True,
+    validation: bool = True,
+    validation_fraction: float = scoring.DEFAULT_FRACTION,
     progress: Callable[[str], None] | None = None,
 ) -> DiagnoseResult:
-    """Rank the effects the model lacks (see the module docstring)."""
+    """Rank the effects the model lacks (see the module docstring). top: fit
+    only the best `top` by screening (None: every one not ruled out)."""
     t0 = time.perf_counter()
     say = progress or (lambda s: None)
     if inputs is None:
@@ -282,110 +338,47 @@ def diagnose(
     say("compare: simulating the model on the measured inputs")
     base = compare(model, meas, inputs)
     ctx = build_context(model, meas, inputs, base.sim, base.regime_masks)
+    split = scoring.split_record(meas.n, validation, validation_fraction)
     effects, skipped = applicable_effects(model)
     nuis = screen(ctx, nuisance_columns(ctx, None), [])
     say(
-        f"screen: {len(effects)} candidate effects on the residual "
-        f"(baseline nrmse {base.nrmse:.4f}, re-estimating present parameters alone "
-        f"{nuis.nrmse:.4f})"
+        f"screen: {len(effects)} candidate effects on the residual (baseline nrmse "
+        f"{base.nrmse:.4f}, re-estimating present parameters alone {nuis.nrmse:.4f})"
     )
-    notes: list[str] = []
-    screened: dict[str, tuple[Effect, Any, float, dict]] = {}
-    for eff in effects:
-        sr = screen_effect(ctx, eff)
-        if isinstance(sr, BacklashEvidence):
-            ev = _evidence_backlash(ctx, sr)
-            pred = sr.predicted_nrmse if sr.strength >= BACKLASH_STRENGTH else nuis.nrmse
-        else:
-            if eff.name == "temperature_dependent_efficiency" and not sr.names[sr.nuisance :]:
-                span = float(np.ptp(ctx.temperature))
-                ev = {
-                    "signature": eff.signature_text,
-                    "temperature_span_K": span,
-                    "temperature_source": ctx.temperature_source,
-                    "text": f"the {ctx.temperature_source} temperature spans only {span:.2f} K: a "
-                    f"temperature dependence cannot be seen in this record",
-                }
-                pred = nuis.nrmse
-            else:
-                ev = _evidence_linear(ctx, eff, sr)
-                pred = sr.nrmse
-        screened[eff.name] = (eff, sr, pred, ev)
-
-    def handicap(eff: Effect) -> float:
-        return 1.0 + PARAMETER_HANDICAP * (eff.n_params - 1)
-
-    order = sorted(screened, key=lambda k: screened[k][2] * handicap(screened[k][0]))
-    to_fit: list[str] = []
-    if fit:
-        for name in order:
-            if len(to_fit) >= top:
-                break
-            pred = screened[name][2]
-            # no point fitting what the residual shows no sign of
-            if to_fit and pred >= 0.98 * nuis.nrmse:
-                continue
-            if name == "backlash" and not (screened[name][1].strength >= BACKLASH_STRENGTH):
-                continue
-            to_fit.append(name)
-        if (
-            "backlash" in screened
-            and "backlash" not in to_fit
-            and screened["backlash"][1].strength >= BACKLASH_STRENGTH
-        ):
-            to_fit.append("backlash")
+    screened = _screen_all(ctx, effects, nuis.nrmse)
+    limit = len(screened) if top is None else top
     cands: list[Candidate] = []
-    for name in order:
-        eff, sr, pred, ev = screened[name]
-        if name in to_fit:
-            say(f"fit: {name} (screening predicts nrmse {pred:.4f})")
-            try:
-                fr = fit_effect(ctx, name, screen_result=sr, max_nfev=20 * (eff.n_params + 2))
-            except Exception as exc:  # a candidate that cannot be fitted is reported, not fatal
-                notes.append(f"{name}: fit failed ({exc}); screening estimate kept")
-                fr = None
-            if fr is not None:
-                cands.append(
-                    Candidate(
-                        name,
-                        fr.nrmse_after,
-                        fr.parameters,
-                        "fit",
-                        ev,
-                        fr.nrmse_after * handicap(eff),
-                        pred,
-                        fr,
-                    )
-                )
-                continue
-        params = _screen_parameters(ctx, eff, sr)
-        cands.append(Candidate(name, pred, params, "screening", ev, pred * handicap(eff), pred))
-
-    # fitted and improving first, then screened only, then fitted without gain
-    def improves(c: Candidate) -> bool:
-        return c.nrmse_after < 0.995 * base.nrmse
-
-    fitted = sorted((c for c in cands if c.method == "fit" and improves(c)), key=lambda c: c.score)
-    rest = sorted((c for c in cands if c.method != "fit"), key=lambda c: c.score)
-    worse = sorted(
-        (c for c in cands if c.method == "fit" and not improves(c)), key=lambda c: c.score
-    )
-    for c in worse:
-        c.evidence["note"] = "fitting it did not lower the error"
+    notes: list[str] = []
+    for s in screened:
+        c = None
+        if fit and not s.ruled_out and sum(c.method == "fit" for c in cands) < limit:
+            c = _fitted_candidate(ctx, s, split, say, notes)
+        cands.append(c or _screening_candidate(ctx, s, split))
+    baseline_score, n_eff = _score_all(ctx, cands, split)
+    tie = scoring.tie_relative(sum(n_eff.values()))
+    ranked = scoring.order_candidates(cands, tie)
+    base_val = _baseline_validation(ctx, split)
+    for c in ranked:
+        c.helps = scoring.helps(c, base_val, baseline_score)
     return DiagnoseResult(
-        base, ctx, fitted + rest + worse, skipped, nuis.nrmse, time.perf_counter() - t0, notes
+        base,
+        ctx,
+        ranked,
+        skipped,
+        nuis.nrmse,
+        time.perf_counter() - t0,
+        split,
+        base_val,
+        baseline_score,
+        n_eff,
+        tie,
+        _warnings(ranked),
+        notes,
     )
 
 
-def _screen_parameters(ctx: Context, eff: Effect, sr: Any) -> dict[str, Any]:
-    """The effect's parameters as the screening seeds them (not fitted), in
-    the same form as a fitted candidate's (program names, model values)."""
-    try:
-        values = {p.name: p.clipped_x0() for p in eff.parameters(ctx, sr)}
-        block, rig = eff.build(ctx, values)
-        return eff.report(mk.changed(ctx.model, block, rig))
-    except Exception:  # a seed the block refuses: show the raw seeds
-        try:
-            return {p.name: p.clipped_x0() for p in eff.parameters(ctx, sr)}
-        except Exception:  # pragma: no cover - defensive
-            return {}
+def _baseline_validation(ctx: Context, split: scoring.ValidationSplit) -> float:
+    from .fitting import validation_nrmse
+
+    sim = {o: ctx.meas[o] - ctx.residual[o] for o in ctx.meas.spec.outputs}
+    return validation_nrmse(ctx.meas, sim, split.validation)

@@ -1,31 +1,33 @@
-"""The effects of docs/measurement-format.md section 3: what each one sets in
-a model, which model parameters it fits, their bounds and first guesses, and
-its residual signature (gearsim.analysis.signatures).
+"""The effects of docs/measurement-format.md section 3, one class each.
 
-Each effect knows:
+An effect class owns everything the analysis knows about one physical effect,
+so that diagnose, fitting and report never test an effect's name:
 
-- ``present(model)``: whether the model already has it (then it is not a
-  candidate);
-- ``unavailable(model, ctx)``: why it cannot be offered (wrong rig, a
-  combination the block cannot express), or None;
-- ``signature(ctx)``: its regressor columns with the physical sign bounds of
-  their coefficients;
-- ``parameters(ctx, screen)``: the free parameters of the fit, seeded from the
-  screening coefficients;
-- ``build(ctx, values)``: the block and rig parameter changes for a set of
-  values of those parameters.
+- ``name``, ``blocks`` (rigs it applies to), ``summary``;
+- ``unavailable(model)``: why it cannot be added (a combination the block
+  cannot express), or None; ``present(model)``: whether the model has it;
+- ``signature_text`` and ``columns(ctx)``: its residual signature and the
+  screening regressors, with the physical bounds of their coefficients;
+- ``screen(ctx)`` and ``ruled_out(ctx, screen)``: the screening result that
+  seeds the fit, and the reason screening alone rules it out (not fitted);
+- ``parameters(ctx, screen)``: the fit's free parameters, bounds and seeds;
+- ``coestimated(ctx, screen)`` / ``nuisance_columns(ctx)``: when the model
+  already has the effect, the parameters re-estimated with a new effect that
+  trades off against it, and their screening columns;
+- ``build(ctx, values)``: the block and rig changes for parameter values;
+- ``report(model)``: how its fitted parameters are reported;
+- ``describe(ctx, screen, ...)``: the evidence text;
+- ``excitation`` / ``separated_from``: the excitation that tells it apart from
+  its look-alikes (identifiability warnings name it).
 
-Parameters already in the model that trade off against a new effect are
-re-estimated with it (:func:`coestimated`): the driven inertia always, and the
-viscous coefficient, Coulomb friction, load offset and constant efficiency
-when the model has them. They share signature columns (a viscous term absorbs
-part of a missing Coulomb friction, an inertia error part of a missing
-efficiency), so fitting the new effect alone would leave them biased.
+Adding an effect means writing one subclass and registering it in EFFECTS.
+The driven inertia is re-estimated with every new effect (an inertia error
+shares the acceleration column with every torque-like effect):
+:data:`INERTIA`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -39,18 +41,18 @@ __all__ = [
     "EFFECT_NAMES",
     "FitParam",
     "Effect",
+    "INERTIA",
     "get_effect",
     "applicable_effects",
     "coestimated",
     "nuisance_columns",
+    "build_changes",
+    "separating_excitation",
+    "present_mesh_loss",
 ]
 
-_EFFICIENCY_MODELS = (
-    "constant_efficiency",
-    "load_dependent_efficiency",
-    "temperature_dependent_efficiency",
-    "temperature_load_dependent_efficiency",
-)
+Changes = tuple[dict[str, Any], dict[str, Any]]
+Column = tuple[str, np.ndarray, tuple[float, float]]
 
 
 @dataclass
@@ -58,8 +60,13 @@ class FitParam:
     """One free parameter of a fit.
 
     name: the program name it is reported under ("load_coulomb_friction",
-    "efficiency_vector[1]", ...); x0: first guess; lower/upper: bounds;
-    unit: SI unit for texts; role: "effect" (new) or "coestimated"."""
+    "efficiency_vector[1]", ...); x0: first guess; lower/upper: bounds; unit:
+    SI unit for texts; role: "effect" (new) or "coestimated"; owner: the
+    effect (or "inertia") it belongs to; before: its value in the starting
+    model; grid: multipliers of x0 tried (cost only) before the local fit, for
+    costs that are not smooth; starts: absolute first guesses from each of
+    which a local fit is run, the best kept (multi-start); optional: left at
+    x0 in quick fits (diagnose); diff_step: relative finite-difference step."""
 
     name: str
     x0: float
@@ -68,65 +75,32 @@ class FitParam:
     unit: str = ""
     role: str = "effect"
     before: float | None = None
-    grid: tuple[float, ...] = ()  # multipliers of x0 tried before the local fit (non-smooth costs)
-    optional: bool = False  # left at x0 in quick fits (diagnose)
+    owner: str = ""
+    grid: tuple[float, ...] = ()
+    starts: tuple[float, ...] = ()
+    optional: bool = False
+    diff_step: float = 1e-6
 
     def clipped_x0(self) -> float:
+        return self.clip(self.x0)
+
+    def clip(self, value: float) -> float:
+        """value moved just inside the bounds (the optimiser needs a strictly
+        feasible start)."""
         span = self.upper - self.lower
-        eps = 1e-6 * (span if np.isfinite(span) else max(abs(self.x0), 1.0))
+        eps = 1e-6 * (span if np.isfinite(span) else max(abs(value), 1.0))
         lo = self.lower + eps if np.isfinite(self.lower) else -np.inf
         hi = self.upper - eps if np.isfinite(self.upper) else np.inf
-        return float(min(max(self.x0, lo), hi))
-
-
-Changes = tuple[dict[str, Any], dict[str, Any]]
-
-
-@dataclass
-class Effect:
-    name: str
-    blocks: tuple[str, ...]
-    summary: str
-    signature_text: str
-    present: Callable[[Any], bool]
-    columns: Callable[[Any], list[tuple[str, np.ndarray, tuple[float, float]]]]
-    parameters: Callable[[Any, Any], list[FitParam]]
-    build: Callable[[Any, dict[str, float]], Changes]
-    report: Callable[[Any], dict[str, Any]]
-    unavailable: Callable[[Any], str | None] = lambda model: None
-    n_params: int = 1
-
-
-def _rig_key_unit(model: Any) -> tuple[str, str]:
-    return ("N*m", "N*m/(rad/s)") if mk.block_name(model) == "simple_gear" else ("N", "N/(m/s)")
+        return float(min(max(value, lo), hi))
 
 
 # ---------------------------------------------------------------- helpers
 
 
-def _visc_key(model: Any) -> str:
-    return (
-        "viscous_coefficients[1]"
-        if mk.block_name(model) == "simple_gear"
-        else "rack_viscous_coefficient"
-    )
-
-
-def _set_viscous(model: Any, value: float, block: dict) -> None:
-    if mk.block_name(model) == "simple_gear":
-        vc = list(mk.block_values(model)["viscous_coefficients"])
-        vc[1] = float(value)
-        block["viscous_coefficients"] = vc
-    else:
-        block["rack_viscous_coefficient"] = float(value)
-
-
-def _bound_delta(current: float, lower: float, upper: float) -> tuple[float, float]:
-    return (lower - current, upper - current)
-
-
 def _seed(screen: Any, name: str, default: float = 0.0) -> float:
-    if screen is None or name not in screen.names:
+    """A screening coefficient by column name (default when not screened)."""
+    names = getattr(screen, "names", None)
+    if not names or name not in names:
         return default
     return screen.coefficient(name)
 
@@ -144,84 +118,12 @@ def _speed_scale(ctx: Any) -> float:
     return max(_robust(ctx.v), 1e-9)
 
 
-# ---------------------------------------------------------------- effects
+def _force_unit(model: Any) -> str:
+    return "N*m" if mk.block_name(model) == "simple_gear" else "N"
 
 
-def _has_visc(model: Any) -> bool:
-    return mk.viscous_value(model) > 0.0 or mk.base_viscous_value(model) > 0.0
-
-
-def _visc_columns(ctx: Any):
-    cur = mk.viscous_value(ctx.model)
-    return [("speed", ctx.columns["speed"], _bound_delta(cur, 0.0, np.inf))]
-
-
-def _visc_params(ctx: Any, screen: Any) -> list[FitParam]:
-    cur = mk.viscous_value(ctx.model)
-    x0 = max(cur + _seed(screen, "speed"), 0.0)
-    hi = 20.0 * _force_scale(ctx) / _speed_scale(ctx)
-    return [
-        FitParam(
-            _visc_key(ctx.model), x0, 0.0, max(hi, 10 * x0), _rig_key_unit(ctx.model)[1], before=cur
-        )
-    ]
-
-
-def _visc_build(ctx: Any, values: dict[str, float]) -> Changes:
-    block: dict[str, Any] = {}
-    _set_viscous(ctx.model, values[_visc_key(ctx.model)], block)
-    return block, {}
-
-
-def _visc_report(model: Any) -> dict[str, Any]:
-    v = mk.block_values(model)
-    if mk.block_name(model) == "simple_gear":
-        return {"viscous_coefficients": list(v["viscous_coefficients"])}
-    return {
-        "rack_viscous_coefficient": v["rack_viscous_coefficient"],
-        "pinion_viscous_coefficient": v["pinion_viscous_coefficient"],
-    }
-
-
-def _coul_columns(ctx: Any):
-    cur = float(mk.rig_values(ctx.model)["load_coulomb_friction"])
-    return [("sign", ctx.columns["sign"], _bound_delta(cur, 0.0, np.inf))]
-
-
-def _coul_params(ctx: Any, screen: Any) -> list[FitParam]:
-    cur = float(mk.rig_values(ctx.model)["load_coulomb_friction"])
-    x0 = max(cur + _seed(screen, "sign"), 0.0)
-    f = _force_scale(ctx)
-    return [
-        FitParam(
-            "load_coulomb_friction",
-            x0,
-            0.0,
-            max(5.0 * f, 10 * x0),
-            _rig_key_unit(ctx.model)[0],
-            before=cur,
-        )
-    ]
-
-
-def _coul_build(ctx: Any, values: dict[str, float]) -> Changes:
-    return {}, {"load_coulomb_friction": float(values["load_coulomb_friction"])}
-
-
-def _offset_columns(ctx: Any):
-    return [("constant", ctx.columns["constant"], (-np.inf, np.inf))]
-
-
-def _offset_params(ctx: Any, screen: Any) -> list[FitParam]:
-    cur = float(mk.rig_values(ctx.model)["load_offset"])
-    x0 = cur + _seed(screen, "constant")
-    f = _force_scale(ctx)
-    lim = max(5.0 * f, 10 * abs(x0))
-    return [FitParam("load_offset", x0, -lim, lim, _rig_key_unit(ctx.model)[0], before=cur)]
-
-
-def _offset_build(ctx: Any, values: dict[str, float]) -> Changes:
-    return {}, {"load_offset": float(values["load_offset"])}
+def _fmt(x: float) -> str:
+    return f"{x:.4g}"
 
 
 def present_mesh_loss(model: Any) -> float:
@@ -231,320 +133,830 @@ def present_mesh_loss(model: Any) -> float:
     return 0.0
 
 
-def _has_eff(model: Any) -> bool:
-    return mk.friction_model(model) in _EFFICIENCY_MODELS
-
-
-def _eff_columns(ctx: Any):
-    return [("mesh", ctx.columns["mesh"], (0.0, 0.7))]
-
-
-def _eff_from_loss(L: float) -> float:
-    # the screening coefficient L mixes 1-eta (overrunning) and 1/eta-1
+def _eff_from_loss(loss: float) -> float:
+    # the screening coefficient mixes 1-eta (overrunning) and 1/eta-1
     # (driving); their mean is ~ (1-eta)(1+1/eta)/2, close to 1-eta
-    return float(min(max(1.0 - L, 0.3), 1.0))
+    return float(min(max(1.0 - loss, 0.3), 1.0))
 
 
-def _eff_params(ctx: Any, screen: Any) -> list[FitParam]:
-    x0 = _eff_from_loss(_seed(screen, "mesh", 0.02))
-    return [FitParam("efficiency_const", min(x0, 0.999), 0.3, 1.0, "")]
+# ---------------------------------------------------------------- the base class
 
 
-def _eff_build(ctx: Any, values: dict[str, float]) -> Changes:
-    return {
-        "friction_model": "constant_efficiency",
-        "efficiency_const": float(values["efficiency_const"]),
-    }, {}
+class Effect:
+    """One physical effect (see the module docstring). Subclasses set the
+    class attributes and override the methods that differ."""
 
+    name: str = ""
+    blocks: tuple[str, ...] = ("simple_gear", "rack_pinion")
+    summary: str = ""
+    signature_text: str = ""
+    #: number of parameters the effect adds (the fit may add optional ones)
+    n_params: int = 1
+    #: effects whose model parameters this one replaces when added (they are
+    #: then not re-estimated alongside it)
+    replaces: tuple[str, ...] = ()
+    #: its simulation is costly (contact): fits run on a leading part of the
+    #: record and include the driven-speed output
+    costly: bool = False
+    #: the excitation that separates it from everything else, and from named
+    #: look-alikes
+    excitation: str = ""
+    separated_from: dict[str, str] = {}
+    internal_excitation: str = ""
 
-def _eff_report(model: Any) -> dict[str, Any]:
-    v = mk.block_values(model)
-    return {"efficiency_const": v["efficiency_const"]}
+    # -- applicability
+    def unavailable(self, model: Any) -> str | None:
+        return None
 
+    def present(self, model: Any) -> bool:  # pragma: no cover - every subclass overrides
+        raise NotImplementedError
 
-# load-dependent efficiency (Simple Gear): tau_mesh = (g*tau_idle + k*|T|)*sgn(w)
+    def applies(self, model: Any) -> str | None:
+        """Why the effect cannot be a candidate for model, or None."""
+        blk = mk.block_name(model)
+        if blk not in self.blocks:
+            return f"does not apply to the {blk} rig"
+        if self.present(model):
+            return "already in the model"
+        return self.unavailable(model)
 
-
-def _ld_unavailable(model: Any) -> str | None:
-    if mk.block_name(model) != "simple_gear":
-        return "the rack and pinion has no load-dependent efficiency model"
-    if mk.friction_model(model) in (
-        "temperature_dependent_efficiency",
-        "temperature_load_dependent_efficiency",
-    ):
-        return (
-            "the model has a temperature-dependent efficiency; combining it with a load dependence "
-            "needs the 2-D efficiency_matrix, which is not fitted automatically"
-        )
-    return None
-
-
-def _ld_present(model: Any) -> bool:
-    return mk.friction_model(model) in (
-        "load_dependent_efficiency",
-        "temperature_load_dependent_efficiency",
-    )
-
-
-def _ld_columns(ctx: Any):
-    L0 = present_mesh_loss(ctx.model)
-    return [
-        ("idle", ctx.columns["idle"], (0.0, np.inf)),
-        ("mesh", ctx.columns["mesh"], (-L0, 0.7 - L0)),
-    ]
-
-
-def _ld_params(ctx: Any, screen: Any) -> list[FitParam]:
-    g = float(mk.block_values(ctx.model)["teeth_ratio"])
-    idle_f = max(_seed(screen, "idle", 0.0), 0.0)  # follower-referred g*tau_idle
-    k = max(present_mesh_loss(ctx.model) + _seed(screen, "mesh", 0.02), 0.0)
-    f = _force_scale(ctx)
-    return [
-        FitParam("idle_torque", idle_f / g, 0.0, max(2.0 * f / g, 10 * idle_f / g), "N*m"),
-        FitParam("load_slope", k, 0.0, 2.0, ""),
-    ]
-
-
-def _ld_build(ctx: Any, values: dict[str, float]) -> Changes:
-    g = float(mk.block_values(ctx.model)["teeth_ratio"])
-    tnom = ctx.nominal_torque
-    idle = float(values["idle_torque"])
-    k = float(values["load_slope"])
-    # eq. 2.5: k = 1/eta_nom - 1 - g*tau_idle/tau_nom  =>  eta_nom; keep k >= 0
-    # and eta_nom < 1 strictly against rounding
-    eta = 1.0 / (1.0 + k + g * idle / tnom + 1e-12)
-    eta = min(eta, 1.0 - 1e-9)
-    return {
-        "friction_model": "load_dependent_efficiency",
-        "idle_torque": idle,
-        "nominal_output_torque": tnom,
-        "efficiency_nominal": eta,
-    }, {}
-
-
-def _ld_report(model: Any) -> dict[str, Any]:
-    v = mk.block_values(model)
-    return {
-        "idle_torque": v["idle_torque"],
-        "nominal_output_torque": v["nominal_output_torque"],
-        "efficiency_nominal": v["efficiency_nominal"],
-    }
-
-
-# temperature-dependent efficiency
-
-
-def _td_present(model: Any) -> bool:
-    return mk.friction_model(model) in (
-        "temperature_dependent_efficiency",
-        "temperature_load_dependent_efficiency",
-    )
-
-
-def _td_unavailable(model: Any) -> str | None:
-    if mk.friction_model(model) in ("load_dependent_efficiency",):
-        return (
-            "the model has a load-dependent efficiency; combining it with a temperature dependence "
-            "needs the 2-D efficiency_matrix, which is not fitted automatically"
-        )
-    return None
-
-
-def _td_breakpoints(ctx: Any) -> np.ndarray:
-    from .signatures import temperature_breakpoints
-
-    return temperature_breakpoints(ctx.temperature)
-
-
-def _td_columns(ctx: Any):
-    from .signatures import temperature_hats
-
-    bp = _td_breakpoints(ctx)
-    if float(np.ptp(ctx.temperature)) < 2.0:
+    # -- screening
+    def columns(self, ctx: Any) -> list[Column]:
         return []
-    hats = temperature_hats(ctx.temperature, bp)
-    mesh = ctx.columns["mesh"]
-    L0 = present_mesh_loss(ctx.model)
-    return [(f"mesh@{t:.1f}K", mesh * hats[:, i], (-L0, 0.7 - L0)) for i, t in enumerate(bp)]
+
+    def screen(self, ctx: Any) -> Any:
+        """The screening of this effect on the baseline residual: a bounded
+        linear regression on the co-estimated columns plus its own."""
+        from .signatures import screen
+
+        return screen(ctx, nuisance_columns(ctx, self), self.columns(ctx))
+
+    def ruled_out(self, ctx: Any, screen: Any) -> str | None:
+        """Why screening alone rules the effect out (it is then not fitted)."""
+        return None
+
+    def predicted_nrmse(self, ctx: Any, screen: Any) -> float:
+        return float(screen.nrmse)
+
+    # -- fitting
+    def parameters(self, ctx: Any, screen: Any) -> list[FitParam]:  # pragma: no cover
+        raise NotImplementedError
+
+    def build(self, ctx: Any, values: dict[str, float]) -> Changes:  # pragma: no cover
+        raise NotImplementedError
+
+    def report(self, model: Any) -> dict[str, Any]:  # pragma: no cover
+        raise NotImplementedError
+
+    def notes(self, model: Any) -> list[str]:
+        """Notes on how the fit reads the effect (identifiability by design)."""
+        return []
+
+    # -- when the model already has it
+    def coestimated(self, ctx: Any, screen: Any) -> list[FitParam]:
+        """Its present parameters, re-estimated when another effect is added."""
+        return []
+
+    def nuisance_columns(self, ctx: Any) -> list[Column]:
+        """Screening columns of the present parameters re-estimated with a new effect."""
+        return []
+
+    # -- evidence
+    def evidence(self, ctx: Any, screen: Any) -> dict[str, Any]:
+        """What the screening saw: partial correlation with the residual, the
+        coefficients, the regime where the effect's part is largest, and a
+        readable text."""
+        nn = screen.nuisance
+        own = {n: float(c) for n, c in zip(screen.names[nn:], screen.coef[nn:], strict=True)}
+        regime, ratio = _own_regime(ctx, screen.explained)
+        r = screen.partial_r
+        ev: dict[str, Any] = {
+            "signature": self.signature_text,
+            "correlation": r,
+            "explained_share": screen.r2_gain,
+            "coefficients": own,
+            "regime": regime,
+            "regime_ratio": ratio,
+        }
+        if own:
+            ev.update(self.evidence_extra(ctx, screen, own))
+        if abs(r) < 0.1 or not np.any(screen.explained):
+            ev["text"] = (
+                f"no sign of it in the residual: {self.signature_text} is not seen "
+                f"(partial correlation r = {r:.2f})"
+            )
+        else:
+            ev["text"] = self.describe(ctx, screen, own, r, regime)
+        return ev
+
+    def describe(self, ctx: Any, screen: Any, own: dict[str, float], r: float, regime: Any) -> str:
+        return f"{self.signature_text} (r = {r:.2f}); largest in {regime}"
+
+    def evidence_extra(self, ctx: Any, screen: Any, own: dict[str, float]) -> dict[str, Any]:
+        return {}
+
+    def __repr__(self) -> str:
+        return f"<effect {self.name}>"
 
 
-def _td_params(ctx: Any, screen: Any) -> list[FitParam]:
-    bp = _td_breakpoints(ctx)
-    L0 = present_mesh_loss(ctx.model)
-    out = []
-    for i, t in enumerate(bp):
-        # screening coefficients are changes of the present loss 1 - eta
-        dL = _seed(screen, f"mesh@{t:.1f}K", 0.02 if L0 == 0 else 0.0)
-        eta = _eff_from_loss(L0 + dL)
-        out.append(FitParam(f"efficiency_vector[{i}]", min(eta, 0.999), 0.3, 1.0, ""))
-    return out
+def _own_regime(ctx: Any, part: np.ndarray) -> tuple[str | None, float]:
+    """The regime where an effect's contribution is largest relative to its
+    overall rms (regimes under 1 % of the samples, or 10, are skipped)."""
+    tot = float(np.sqrt(np.mean(part**2))) if part.size else 0.0
+    best, ratio = None, 0.0
+    if tot <= 0:
+        return None, 0.0
+    for reg in ctx.regimes:
+        if reg.mask.sum() < max(10, 0.01 * reg.mask.size):
+            continue
+        r = float(np.sqrt(np.mean(part[reg.mask] ** 2))) / tot
+        if r > ratio:
+            best, ratio = reg.name, r
+    return best, ratio
 
 
-def _td_build(ctx: Any, values: dict[str, float]) -> Changes:
-    bp = _td_breakpoints(ctx)
-    eff = [float(values[f"efficiency_vector[{i}]"]) for i in range(bp.size)]
-    return {
-        "friction_model": "temperature_dependent_efficiency",
-        "temperature_vector": [float(x) for x in bp],
-        "efficiency_vector": eff,
-    }, {}
+# ---------------------------------------------------------------- inertia
 
 
-def _td_report(model: Any) -> dict[str, Any]:
-    v = mk.block_values(model)
-    return {
-        "temperature_vector": list(v["temperature_vector"]),
-        "efficiency_vector": list(v["efficiency_vector"]),
+class DrivenInertia:
+    """The driven inertia (follower_inertia / rack_mass), re-estimated with
+    every new effect. Not an effect a model can lack; it only takes part in
+    the co-estimation and the identifiability texts."""
+
+    name = "inertia"
+    excitation = "accelerate and decelerate hard at constant load"
+    separated_from = {
+        "meshing_efficiency": "hold constant speeds under load (no acceleration) and accelerate "
+        "hard with no load",
+        "viscous_friction": "hold at two speeds, then accelerate hard between them",
+        "coulomb_friction": "accelerate hard within one direction of motion",
+        "load_offset": "hold still under load, then accelerate hard",
     }
 
+    def parameter(self, ctx: Any, screen: Any) -> FitParam:
+        key = mk.driven_inertia_key(ctx.model)
+        j0 = float(mk.rig_values(ctx.model)[key])
+        j = j0 + _seed(screen, "acceleration", 0.0)
+        j = j if j > 0 else j0
+        unit = "kg*m^2" if key == "follower_inertia" else "kg"
+        return FitParam(
+            key, j, j0 * 1e-3, j0 * 1e3, unit, role="coestimated", before=j0, owner=self.name
+        )
 
-# backlash
-
-
-def _bl_present(model: Any) -> bool:
-    return bool(mk.block_values(model).get("backlash_enabled", False))
-
-
-def _bl_params(ctx: Any, screen: Any) -> list[FitParam]:
-    gap = getattr(screen, "gap_estimate", None) if screen is not None else None
-    if not gap or not np.isfinite(gap) or gap <= 0:
-        gap = 1e-3
-    v = mk.block_values(ctx.model)
-    k0 = float(v["stiffness"])
-    d0 = float(v["damping"])
-    return [
-        FitParam(
-            "linear_backlash",
-            float(gap),
-            1e-7,
-            max(100.0 * gap, 0.05),
-            "m",
-            grid=(0.3, 0.5, 0.7, 1.0, 1.4, 2.0, 3.0),
-        ),
-        FitParam(
-            "stiffness", k0, 1e-3 * k0, 1e3 * k0, "N/m", grid=(0.1, 0.3, 1.0, 3.0), optional=True
-        ),
-        FitParam(
-            "damping", d0, 0.0, 1e3 * max(d0, 1.0), "N*s/m", grid=(0.3, 1.0, 3.0), optional=True
-        ),
-    ]
+    def column(self, ctx: Any) -> Column:
+        j0 = float(mk.rig_values(ctx.model)[mk.driven_inertia_key(ctx.model)])
+        return ("acceleration", ctx.columns["acceleration"], (-0.999 * j0, 1e3 * j0))
 
 
-def _bl_build(ctx: Any, values: dict[str, float]) -> Changes:
-    b = float(values["linear_backlash"])
-    v = mk.block_values(ctx.model)
-    block = {"backlash_enabled": True, "linear_backlash": b}
-    for key in ("stiffness", "damping"):
-        if key in values:
-            block[key] = float(values[key])
-    d = float(v.get("transition_region", 1e-4))
-    if v.get("hard_stop_model", "smooth") == "smooth" and d >= 0.25 * b:
-        block["transition_region"] = 0.25 * b
-    return block, {}
+INERTIA = DrivenInertia()
 
 
-def _bl_report(model: Any) -> dict[str, Any]:
-    v = mk.block_values(model)
-    out = {
-        "linear_backlash": v["linear_backlash"],
-        "stiffness": v["stiffness"],
-        "damping": v["damping"],
+# ---------------------------------------------------------------- the effects
+
+
+class ViscousFriction(Effect):
+    name = "viscous_friction"
+    summary = "viscous friction on the driven side"
+    signature_text = "residual proportional to the speed"
+    excitation = "hold at two speeds"
+    separated_from = {
+        "coulomb_friction": "hold at two speeds (viscous friction grows with speed, Coulomb "
+        "friction does not)",
+        "meshing_efficiency": "hold at two speeds under the same load",
     }
-    if mk.block_name(model) == "simple_gear":
-        out["base_radius"] = v["base_radius"]
-    return out
+
+    @staticmethod
+    def key(model: Any) -> str:
+        if mk.block_name(model) == "simple_gear":
+            return "viscous_coefficients[1]"
+        return "rack_viscous_coefficient"
+
+    def present(self, model: Any) -> bool:
+        return mk.viscous_value(model) > 0.0 or mk.base_viscous_value(model) > 0.0
+
+    def columns(self, ctx: Any) -> list[Column]:
+        cur = mk.viscous_value(ctx.model)
+        return [("speed", ctx.columns["speed"], (0.0 - cur, np.inf))]
+
+    def parameters(self, ctx: Any, screen: Any) -> list[FitParam]:
+        cur = mk.viscous_value(ctx.model)
+        x0 = max(cur + _seed(screen, "speed"), 0.0)
+        hi = 20.0 * _force_scale(ctx) / _speed_scale(ctx)
+        unit = "N*m/(rad/s)" if mk.block_name(ctx.model) == "simple_gear" else "N/(m/s)"
+        key = self.key(ctx.model)
+        return [FitParam(key, x0, 0.0, max(hi, 10 * x0), unit, before=cur, owner=self.name)]
+
+    def build(self, ctx: Any, values: dict[str, float]) -> Changes:
+        key = self.key(ctx.model)
+        if key not in values:
+            return {}, {}
+        if mk.block_name(ctx.model) == "simple_gear":
+            vc = list(mk.block_values(ctx.model)["viscous_coefficients"])
+            vc[1] = float(values[key])
+            return {"viscous_coefficients": vc}, {}
+        return {"rack_viscous_coefficient": float(values[key])}, {}
+
+    def report(self, model: Any) -> dict[str, Any]:
+        v = mk.block_values(model)
+        if mk.block_name(model) == "simple_gear":
+            return {"viscous_coefficients": list(v["viscous_coefficients"])}
+        return {
+            "rack_viscous_coefficient": v["rack_viscous_coefficient"],
+            "pinion_viscous_coefficient": v["pinion_viscous_coefficient"],
+        }
+
+    def notes(self, model: Any) -> list[str]:
+        if mk.block_name(model) != "simple_gear":
+            return []
+        return [
+            "base and follower viscous coefficients act alike on a rigid, speed-driven mesh; "
+            "the fit puts the whole viscous loss on the follower side (viscous_coefficients[1])"
+        ]
+
+    def coestimated(self, ctx: Any, screen: Any) -> list[FitParam]:
+        return [_as_coestimated(p) for p in self.parameters(ctx, screen)]
+
+    def nuisance_columns(self, ctx: Any) -> list[Column]:
+        return self.columns(ctx)
+
+    def describe(self, ctx, screen, own, r, regime) -> str:
+        return (
+            f"residual grows in proportion to speed (r = {r:.2f}, slope "
+            f"{_fmt(own.get('speed', 0.0))} {ctx.meas.spec.driven_force_unit} per "
+            f"{ctx.meas.spec.driven_speed_unit} of driven speed); largest in {regime}"
+        )
 
 
-EFFECTS: dict[str, Effect] = {
-    "meshing_efficiency": Effect(
-        "meshing_efficiency",
-        ("simple_gear", "rack_pinion"),
-        "constant meshing efficiency (friction_model = constant_efficiency)",
-        "residual proportional to |transmitted torque| with the sign of the speed: the "
-        "drive needs more "
-        "torque while it drives the load and less while the load overruns",
-        _has_eff,
-        _eff_columns,
-        _eff_params,
-        _eff_build,
-        _eff_report,
-    ),
-    "load_dependent_efficiency": Effect(
-        "load_dependent_efficiency",
-        ("simple_gear",),
-        "load-dependent efficiency: idle torque plus a loss proportional to load",
-        "a Coulomb-like part at no load plus a part growing with |transmitted torque|: the "
-        "efficiency "
-        "falls at low load",
-        _ld_present,
-        _ld_columns,
-        _ld_params,
-        _ld_build,
-        _ld_report,
-        _ld_unavailable,
-        n_params=2,
-    ),
-    "temperature_dependent_efficiency": Effect(
-        "temperature_dependent_efficiency",
-        ("simple_gear", "rack_pinion"),
-        "efficiency interpolated over temperature (friction_model = "
-        "temperature_dependent_efficiency)",
-        "the torque-proportional meshing loss changes with temperature",
-        _td_present,
-        _td_columns,
-        _td_params,
-        _td_build,
-        _td_report,
-        _td_unavailable,
-        n_params=3,
-    ),
-    "viscous_friction": Effect(
-        "viscous_friction",
-        ("simple_gear", "rack_pinion"),
-        "viscous friction on the driven side",
-        "residual proportional to the speed",
-        _has_visc,
-        _visc_columns,
-        _visc_params,
-        _visc_build,
-        _visc_report,
-    ),
-    "backlash": Effect(
-        "backlash",
-        ("simple_gear", "rack_pinion"),
-        "backlash with its gap (stiffness and damping kept)",
-        "residual concentrated right after reversals of the transmitted torque, with a "
-        "driven-speed "
-        "residual whose integral is the gap",
-        _bl_present,
-        lambda ctx: [],
-        _bl_params,
-        _bl_build,
-        _bl_report,
-    ),
-    "coulomb_friction": Effect(
-        "coulomb_friction",
-        ("simple_gear", "rack_pinion"),
-        "Coulomb friction on the driven side (rig load_coulomb_friction)",
+class CoulombFriction(Effect):
+    name = "coulomb_friction"
+    summary = "Coulomb friction on the driven side (rig load_coulomb_friction)"
+    signature_text = (
         "residual follows the sign of the speed: a constant-magnitude step at each "
-        "direction reversal",
-        lambda m: float(mk.rig_values(m)["load_coulomb_friction"]) > 0.0,
-        _coul_columns,
-        _coul_params,
-        _coul_build,
-        lambda m: {"load_coulomb_friction": mk.rig_values(m)["load_coulomb_friction"]},
-    ),
-    "load_offset": Effect(
-        "load_offset",
-        ("simple_gear", "rack_pinion"),
-        "constant load offset on the driven side (rig load_offset)",
-        "constant bias of the residual in every regime",
-        lambda m: float(mk.rig_values(m)["load_offset"]) != 0.0,
-        _offset_columns,
-        _offset_params,
-        _offset_build,
-        lambda m: {"load_offset": mk.rig_values(m)["load_offset"]},
-    ),
+        "direction reversal"
+    )
+    excitation = "reverse the direction of motion at a constant load"
+    separated_from = {
+        "load_offset": "reverse the direction of motion (Coulomb friction flips with it, an "
+        "offset does not)",
+        "meshing_efficiency": "hold at two loads in each direction (an efficiency loss scales "
+        "with the load, Coulomb friction does not)",
+        "load_dependent_efficiency": "hold at several loads, including near zero load",
+        "viscous_friction": "hold at two speeds",
+    }
+
+    def present(self, model: Any) -> bool:
+        return float(mk.rig_values(model)["load_coulomb_friction"]) > 0.0
+
+    def columns(self, ctx: Any) -> list[Column]:
+        cur = float(mk.rig_values(ctx.model)["load_coulomb_friction"])
+        return [("sign", ctx.columns["sign"], (0.0 - cur, np.inf))]
+
+    def parameters(self, ctx: Any, screen: Any) -> list[FitParam]:
+        cur = float(mk.rig_values(ctx.model)["load_coulomb_friction"])
+        x0 = max(cur + _seed(screen, "sign"), 0.0)
+        hi = max(5.0 * _force_scale(ctx), 10 * x0)
+        unit = _force_unit(ctx.model)
+        return [FitParam("load_coulomb_friction", x0, 0.0, hi, unit, before=cur, owner=self.name)]
+
+    def build(self, ctx: Any, values: dict[str, float]) -> Changes:
+        if "load_coulomb_friction" not in values:
+            return {}, {}
+        return {}, {"load_coulomb_friction": float(values["load_coulomb_friction"])}
+
+    def report(self, model: Any) -> dict[str, Any]:
+        return {"load_coulomb_friction": mk.rig_values(model)["load_coulomb_friction"]}
+
+    def coestimated(self, ctx: Any, screen: Any) -> list[FitParam]:
+        return [_as_coestimated(p) for p in self.parameters(ctx, screen)]
+
+    def nuisance_columns(self, ctx: Any) -> list[Column]:
+        return self.columns(ctx)
+
+    def describe(self, ctx, screen, own, r, regime) -> str:
+        fc = own.get("sign", 0.0)
+        return (
+            f"residual follows sign(speed) (r = {r:.2f}): a step of 2 x {_fmt(fc)} "
+            f"{ctx.meas.spec.driven_force_unit} at each direction reversal; largest in {regime}"
+        )
+
+
+class LoadOffset(Effect):
+    name = "load_offset"
+    summary = "constant load offset on the driven side (rig load_offset)"
+    signature_text = "constant bias of the residual in every regime"
+    excitation = "reverse under load"
+    separated_from = {
+        "coulomb_friction": "reverse the direction of motion (an offset keeps its sign)",
+        "meshing_efficiency": "reverse under load (an offset keeps its sign, a meshing loss "
+        "follows the power flow)",
+    }
+
+    def present(self, model: Any) -> bool:
+        return float(mk.rig_values(model)["load_offset"]) != 0.0
+
+    def columns(self, ctx: Any) -> list[Column]:
+        return [("constant", ctx.columns["constant"], (-np.inf, np.inf))]
+
+    def parameters(self, ctx: Any, screen: Any) -> list[FitParam]:
+        cur = float(mk.rig_values(ctx.model)["load_offset"])
+        x0 = cur + _seed(screen, "constant")
+        lim = max(5.0 * _force_scale(ctx), 10 * abs(x0))
+        unit = _force_unit(ctx.model)
+        return [FitParam("load_offset", x0, -lim, lim, unit, before=cur, owner=self.name)]
+
+    def build(self, ctx: Any, values: dict[str, float]) -> Changes:
+        if "load_offset" not in values:
+            return {}, {}
+        return {}, {"load_offset": float(values["load_offset"])}
+
+    def report(self, model: Any) -> dict[str, Any]:
+        return {"load_offset": mk.rig_values(model)["load_offset"]}
+
+    def coestimated(self, ctx: Any, screen: Any) -> list[FitParam]:
+        return [_as_coestimated(p) for p in self.parameters(ctx, screen)]
+
+    def nuisance_columns(self, ctx: Any) -> list[Column]:
+        return self.columns(ctx)
+
+    def describe(self, ctx, screen, own, r, regime) -> str:
+        bias = -own.get("constant", 0.0)
+        shown = ("driving", "overrunning", "direction_reversal", "high_speed")
+        per = [
+            f"{reg.name} {_fmt(float(np.mean(ctx.r_d[reg.mask])))}"
+            for reg in ctx.regimes
+            if reg.mask.any() and reg.name in shown
+        ]
+        return (
+            f"constant bias of the driven-side residual: {_fmt(bias)} "
+            f"{ctx.meas.spec.driven_force_unit} of missing load offset (r = {r:.2f}); mean "
+            f"residual by regime: {', '.join(per)}"
+        )
+
+
+class MeshingEfficiency(Effect):
+    name = "meshing_efficiency"
+    summary = "constant meshing efficiency (friction_model = constant_efficiency)"
+    signature_text = (
+        "residual proportional to |transmitted torque| with the sign of the speed: the drive "
+        "needs more torque while it drives the load and less while the load overruns"
+    )
+    excitation = "reverse under load: drive the load, then let it overrun"
+    separated_from = {
+        "load_dependent_efficiency": "hold at several loads, including near zero load",
+        "coulomb_friction": "hold at two loads in each direction",
+        "load_offset": "reverse under load",
+    }
+
+    def present(self, model: Any) -> bool:
+        return mk.friction_model(model) in _EFFICIENCY_MODELS
+
+    def columns(self, ctx: Any) -> list[Column]:
+        return [("mesh", ctx.columns["mesh"], (0.0, 0.7))]
+
+    def parameters(self, ctx: Any, screen: Any) -> list[FitParam]:
+        x0 = _eff_from_loss(_seed(screen, "mesh", 0.02))
+        return [FitParam("efficiency_const", min(x0, 0.999), 0.3, 1.0, "", owner=self.name)]
+
+    def build(self, ctx: Any, values: dict[str, float]) -> Changes:
+        if "efficiency_const" not in values:
+            return {}, {}
+        eta = float(values["efficiency_const"])
+        return {"friction_model": "constant_efficiency", "efficiency_const": eta}, {}
+
+    def report(self, model: Any) -> dict[str, Any]:
+        return {"efficiency_const": mk.block_values(model)["efficiency_const"]}
+
+    def _constant(self, model: Any) -> bool:
+        return mk.friction_model(model) == "constant_efficiency"
+
+    def coestimated(self, ctx: Any, screen: Any) -> list[FitParam]:
+        if not self._constant(ctx.model):
+            return []  # the table efficiencies are not re-estimated automatically
+        cur = float(mk.block_values(ctx.model)["efficiency_const"])
+        eta = _eff_from_loss((1.0 - cur) + _seed(screen, "mesh", 0.0))
+        return [
+            FitParam(
+                "efficiency_const",
+                min(eta, 0.999),
+                0.3,
+                1.0,
+                "",
+                role="coestimated",
+                before=cur,
+                owner=self.name,
+            )
+        ]
+
+    def nuisance_columns(self, ctx: Any) -> list[Column]:
+        if not self._constant(ctx.model):
+            return []
+        loss = present_mesh_loss(ctx.model)
+        return [("mesh", ctx.columns["mesh"], (-loss, 0.7 - loss))]
+
+    def describe(self, ctx, screen, own, r, regime) -> str:
+        split = _flow_split(ctx)
+        return (
+            f"residual proportional to |transmitted torque| x sign(speed) (r = {r:.2f}): loss "
+            f"factor {_fmt(split.get('loss_factor_driving', float('nan')))} while driving, "
+            f"{_fmt(split.get('loss_factor_overrunning', float('nan')))} while overrunning "
+            f"(efficiency ~ {_fmt(1.0 - own.get('mesh', 0.0))}); largest in {regime}"
+        )
+
+    def evidence_extra(self, ctx, screen, own) -> dict[str, Any]:
+        return _flow_split(ctx)
+
+
+def _flow_split(ctx: Any) -> dict[str, float]:
+    """Mesh-loss coefficient fitted separately where the drive drives the load
+    and where the load overruns (power-flow direction), the inertia part
+    removed with it."""
+    x = ctx.columns["mesh"]
+    a = ctx.columns["acceleration"]
+    p = ctx.T * ctx.v
+    out = {}
+    for name, m in (("driving", p < 0), ("overrunning", p > 0)):
+        if m.sum() < 20:
+            continue
+        coef, *_ = np.linalg.lstsq(np.column_stack([x[m], a[m]]), ctx.r_d[m], rcond=None)
+        out[f"loss_factor_{name}"] = float(coef[0])
+    return out
+
+
+_EFFICIENCY_MODELS = (
+    "constant_efficiency",
+    "load_dependent_efficiency",
+    "temperature_dependent_efficiency",
+    "temperature_load_dependent_efficiency",
+)
+
+
+class LoadDependentEfficiency(Effect):
+    """tau_mesh = (g*tau_idle + k*|T|)*sgn(w) on the follower (eq. 2.4, 2.5)."""
+
+    name = "load_dependent_efficiency"
+    blocks = ("simple_gear",)
+    summary = "load-dependent efficiency: idle torque plus a loss proportional to load"
+    signature_text = (
+        "a Coulomb-like part at no load plus a part growing with |transmitted torque|: the "
+        "efficiency falls at low load"
+    )
+    n_params = 2
+    replaces = ("meshing_efficiency",)
+    excitation = "hold at several loads, including near zero load"
+    separated_from = {
+        "meshing_efficiency": "hold at several loads, including near zero load (only a "
+        "load-dependent efficiency keeps a loss at no load)",
+        "coulomb_friction": "hold at several loads, including near zero load",
+    }
+
+    def present(self, model: Any) -> bool:
+        return mk.friction_model(model) in (
+            "load_dependent_efficiency",
+            "temperature_load_dependent_efficiency",
+        )
+
+    def unavailable(self, model: Any) -> str | None:
+        if mk.friction_model(model) in (
+            "temperature_dependent_efficiency",
+            "temperature_load_dependent_efficiency",
+        ):
+            return (
+                "the model has a temperature-dependent efficiency; combining it with a load "
+                "dependence needs the 2-D efficiency_matrix, which is not fitted automatically"
+            )
+        return None
+
+    def columns(self, ctx: Any) -> list[Column]:
+        loss = present_mesh_loss(ctx.model)
+        return [
+            ("idle", ctx.columns["idle"], (0.0, np.inf)),
+            ("mesh", ctx.columns["mesh"], (-loss, 0.7 - loss)),
+        ]
+
+    def parameters(self, ctx: Any, screen: Any) -> list[FitParam]:
+        g = float(mk.block_values(ctx.model)["teeth_ratio"])
+        idle_f = max(_seed(screen, "idle", 0.0), 0.0)  # follower-referred g*tau_idle
+        k = max(present_mesh_loss(ctx.model) + _seed(screen, "mesh", 0.02), 0.0)
+        hi = max(2.0 * _force_scale(ctx) / g, 10 * idle_f / g)
+        return [
+            FitParam("idle_torque", idle_f / g, 0.0, hi, "N*m", owner=self.name),
+            FitParam("load_slope", k, 0.0, 2.0, "", owner=self.name),
+        ]
+
+    def build(self, ctx: Any, values: dict[str, float]) -> Changes:
+        if "idle_torque" not in values:
+            return {}, {}  # present and not re-estimated
+        g = float(mk.block_values(ctx.model)["teeth_ratio"])
+        tnom = ctx.nominal_torque
+        idle = float(values["idle_torque"])
+        k = float(values["load_slope"])
+        # eq. 2.5: k = 1/eta_nom - 1 - g*tau_idle/tau_nom  =>  eta_nom; keep
+        # eta_nom < 1 strictly against rounding
+        eta = min(1.0 / (1.0 + k + g * idle / tnom + 1e-12), 1.0 - 1e-9)
+        return {
+            "friction_model": "load_dependent_efficiency",
+            "idle_torque": idle,
+            "nominal_output_torque": tnom,
+            "efficiency_nominal": eta,
+        }, {}
+
+    def report(self, model: Any) -> dict[str, Any]:
+        v = mk.block_values(model)
+        keys = ("idle_torque", "nominal_output_torque", "efficiency_nominal")
+        return {k: v[k] for k in keys}
+
+    def describe(self, ctx, screen, own, r, regime) -> str:
+        eff = self.evidence_extra(ctx, screen, own)["efficiency_at_load"]
+        return (
+            f"loss = {_fmt(own.get('idle', 0.0))} {ctx.meas.spec.driven_force_unit} at no load + "
+            f"{_fmt(own.get('mesh', 0.0))} x |transmitted torque| (r = {r:.2f}): efficiency "
+            f"{_fmt(eff['10%'])} at 10 % of the peak load vs {_fmt(eff['100%'])} at the peak; "
+            f"largest in {regime}"
+        )
+
+    def evidence_extra(self, ctx, screen, own) -> dict[str, Any]:
+        idle, k = own.get("idle", 0.0), own.get("mesh", 0.0)
+        tmax = float(np.percentile(np.abs(ctx.T), 95)) or 1.0
+        eff = {}
+        for frac in (0.1, 1.0):
+            t = frac * tmax
+            eff[f"{int(frac * 100)}%"] = t / (t + idle + k * t) if t > 0 else float("nan")
+        return {"efficiency_at_load": eff}
+
+
+class TemperatureDependentEfficiency(Effect):
+    name = "temperature_dependent_efficiency"
+    summary = (
+        "efficiency interpolated over temperature (friction_model = "
+        "temperature_dependent_efficiency)"
+    )
+    signature_text = "the torque-proportional meshing loss changes with temperature"
+    n_params = 3
+    replaces = ("meshing_efficiency",)
+    excitation = "hold at one load while the temperature changes"
+    separated_from = {
+        "meshing_efficiency": "hold at one load and speed while the gear warms up",
+    }
+    #: a temperature span (K) below which no temperature dependence can be seen
+    MIN_SPAN = 2.0
+
+    def present(self, model: Any) -> bool:
+        return mk.friction_model(model) in (
+            "temperature_dependent_efficiency",
+            "temperature_load_dependent_efficiency",
+        )
+
+    def unavailable(self, model: Any) -> str | None:
+        if mk.friction_model(model) == "load_dependent_efficiency":
+            return (
+                "the model has a load-dependent efficiency; combining it with a temperature "
+                "dependence needs the 2-D efficiency_matrix, which is not fitted automatically"
+            )
+        return None
+
+    @staticmethod
+    def breakpoints(ctx: Any) -> np.ndarray:
+        from .signatures import temperature_breakpoints
+
+        return temperature_breakpoints(ctx.temperature)
+
+    def columns(self, ctx: Any) -> list[Column]:
+        from .signatures import temperature_hats
+
+        if float(np.ptp(ctx.temperature)) < self.MIN_SPAN:
+            return []
+        bp = self.breakpoints(ctx)
+        hats = temperature_hats(ctx.temperature, bp)
+        loss = present_mesh_loss(ctx.model)
+        mesh = ctx.columns["mesh"]
+        return [
+            (f"mesh@{t:.1f}K", mesh * hats[:, i], (-loss, 0.7 - loss)) for i, t in enumerate(bp)
+        ]
+
+    def ruled_out(self, ctx: Any, screen: Any) -> str | None:
+        span = float(np.ptp(ctx.temperature))
+        if span < self.MIN_SPAN:
+            return (
+                f"the {ctx.temperature_source} temperature spans only {span:.2f} K: a "
+                "temperature dependence cannot be seen in this record"
+            )
+        return None
+
+    def predicted_nrmse(self, ctx: Any, screen: Any) -> float:
+        return float(screen.nrmse)
+
+    def parameters(self, ctx: Any, screen: Any) -> list[FitParam]:
+        loss = present_mesh_loss(ctx.model)
+        out = []
+        for i, t in enumerate(self.breakpoints(ctx)):
+            # screening coefficients are changes of the present loss 1 - eta
+            d_loss = _seed(screen, f"mesh@{t:.1f}K", 0.02 if loss == 0 else 0.0)
+            eta = min(_eff_from_loss(loss + d_loss), 0.999)
+            out.append(FitParam(f"efficiency_vector[{i}]", eta, 0.3, 1.0, "", owner=self.name))
+        return out
+
+    def build(self, ctx: Any, values: dict[str, float]) -> Changes:
+        if "efficiency_vector[0]" not in values:
+            return {}, {}  # present and not re-estimated
+        bp = self.breakpoints(ctx)
+        return {
+            "friction_model": "temperature_dependent_efficiency",
+            "temperature_vector": [float(x) for x in bp],
+            "efficiency_vector": [float(values[f"efficiency_vector[{i}]"]) for i in range(bp.size)],
+        }, {}
+
+    def report(self, model: Any) -> dict[str, Any]:
+        v = mk.block_values(model)
+        return {
+            "temperature_vector": list(v["temperature_vector"]),
+            "efficiency_vector": list(v["efficiency_vector"]),
+        }
+
+    def describe(self, ctx, screen, own, r, regime) -> str:
+        loss = present_mesh_loss(ctx.model)
+        pts = [f"{1.0 - (loss + c):.3f} at {name.split('@')[1]}" for name, c in own.items()]
+        span = float(np.ptp(ctx.temperature))
+        return (
+            f"the torque-proportional loss changes with temperature (r = {r:.2f}): efficiency "
+            f"{', '.join(pts)} ({ctx.temperature_source} temperature spans {span:.1f} K); "
+            f"largest in {regime}"
+        )
+
+    def evidence_extra(self, ctx, screen, own) -> dict[str, Any]:
+        return {
+            "temperature_span_K": float(np.ptp(ctx.temperature)),
+            "temperature_source": ctx.temperature_source,
+        }
+
+
+class Backlash(Effect):
+    name = "backlash"
+    summary = "backlash with its gap (stiffness and damping kept)"
+    signature_text = (
+        "residual concentrated right after reversals of the transmitted torque, with a "
+        "driven-speed residual whose integral is the gap"
+    )
+    costly = True
+    excitation = "dwell at zero speed, then reverse the load slowly"
+    separated_from: dict[str, str] = {}
+    #: what separates its own parameters (gap, contact stiffness, damping)
+    internal_excitation = (
+        "reverse the load slowly (the gap shows) and quickly (contact stiffness and damping show)"
+    )
+    #: concentration of the driven-speed residual after reversals below which
+    #: the screening rules backlash out (~1 without backlash-like physics)
+    MIN_STRENGTH = 1.5
+    #: local fits started from this many gaps spread over the evidence's range
+    STARTS = 5
+
+    def present(self, model: Any) -> bool:
+        return bool(mk.block_values(model).get("backlash_enabled", False))
+
+    def screen(self, ctx: Any) -> Any:
+        from .signatures import backlash_evidence
+
+        return backlash_evidence(ctx)
+
+    def ruled_out(self, ctx: Any, screen: Any) -> str | None:
+        if screen.strength >= self.MIN_STRENGTH:
+            return None
+        return (
+            f"the driven-speed residual is not concentrated after reversals "
+            f"({screen.strength:.2f}x its share, {self.MIN_STRENGTH}x needed)"
+        )
+
+    def predicted_nrmse(self, ctx: Any, screen: Any) -> float:
+        return float(screen.predicted_nrmse)
+
+    def start_gaps(self, screen: Any) -> tuple[float, ...]:
+        """First guesses of the gap (m): geometric steps over the range the
+        evidence gives, widened by 2 on each side (the integral of the speed
+        residual over a window under- or over-shoots the gap)."""
+        lo, hi = getattr(screen, "gap_range", (0.0, 0.0))
+        if not (np.isfinite(lo) and np.isfinite(hi)) or hi <= 0:
+            return (1e-4, 3e-4, 1e-3, 3e-3)
+        lo = max(lo, 0.05 * hi, 1e-7)
+        return tuple(float(g) for g in np.geomspace(0.5 * lo, 2.0 * hi, self.STARTS))
+
+    def parameters(self, ctx: Any, screen: Any) -> list[FitParam]:
+        gap = getattr(screen, "gap_estimate", None) if screen is not None else None
+        if not gap or not np.isfinite(gap) or gap <= 0:
+            gap = 1e-3
+        v = mk.block_values(ctx.model)
+        k0, d0 = float(v["stiffness"]), float(v["damping"])
+        o = self.name
+        return [
+            FitParam(
+                "linear_backlash",
+                float(gap),
+                1e-7,
+                max(100.0 * gap, 0.05),
+                "m",
+                owner=o,
+                starts=self.start_gaps(screen),
+                diff_step=1e-3,
+            ),
+            FitParam(
+                "stiffness",
+                k0,
+                1e-3 * k0,
+                1e3 * k0,
+                "N/m",
+                owner=o,
+                grid=(0.1, 0.3, 1.0, 3.0),
+                optional=True,
+                diff_step=1e-3,
+            ),
+            FitParam(
+                "damping",
+                d0,
+                0.0,
+                1e3 * max(d0, 1.0),
+                "N*s/m",
+                owner=o,
+                grid=(0.3, 1.0, 3.0),
+                optional=True,
+                diff_step=1e-3,
+            ),
+        ]
+
+    def build(self, ctx: Any, values: dict[str, float]) -> Changes:
+        if "linear_backlash" not in values:
+            return {}, {}
+        b = float(values["linear_backlash"])
+        v = mk.block_values(ctx.model)
+        block: dict[str, Any] = {"backlash_enabled": True, "linear_backlash": b}
+        for key in ("stiffness", "damping"):
+            if key in values:
+                block[key] = float(values[key])
+        d = float(v.get("transition_region", 1e-4))
+        if v.get("hard_stop_model", "smooth") == "smooth" and d >= 0.25 * b:
+            block["transition_region"] = 0.25 * b
+        return block, {}
+
+    def report(self, model: Any) -> dict[str, Any]:
+        v = mk.block_values(model)
+        out = {k: v[k] for k in ("linear_backlash", "stiffness", "damping")}
+        if mk.block_name(model) == "simple_gear":
+            out["base_radius"] = v["base_radius"]
+        return out
+
+    def coestimated(self, ctx: Any, screen: Any) -> list[FitParam]:
+        # the present gap, stiffness and damping are re-estimated with a new
+        # effect: fitted without it (a friction missing), the contact absorbs
+        # part of the missing loss
+        v = mk.block_values(ctx.model)
+        out = []
+        for p in self.parameters(ctx, None):
+            now = float(v[p.name])
+            p.x0, p.before, p.role = now, now, "coestimated"
+            p.lower, p.upper = min(p.lower, now), max(p.upper, now)
+            p.starts, p.grid, p.optional = (), (), False
+            out.append(p)
+        return out
+
+    def evidence(self, ctx: Any, be: Any) -> dict[str, Any]:
+        ms = be.window * ctx.meas.dt * 1e3
+        conc = {k: float(v) for k, v in be.concentration.items()}
+        so, to = ctx.speed_output, ctx.torque_output
+        share_s = conc.get(so, 0) * be.time_fraction * 100
+        share_t = conc.get(to, 0) * be.time_fraction * 100
+        return {
+            "signature": self.signature_text,
+            "reversals": int(be.events.size),
+            "window_ms": ms,
+            "time_fraction": be.time_fraction,
+            "concentration": conc,
+            "gap_estimate_m": be.gap_estimate,
+            "gap_range_m": list(be.gap_range),
+            "regime": "torque_reversal",
+            "text": (
+                f"{100 * be.time_fraction:.1f} % of the time (the {ms:.0f} ms after "
+                f"{be.events.size} torque reversals) holds {share_s:.0f} % of the {so} residual "
+                f"energy ({conc.get(so, 0):.1f}x its share) and {share_t:.0f} % of the {to} "
+                f"residual energy; the {so} residual integrates to a gap of "
+                f"{be.gap_estimate * 1e3:.3g} mm"
+            ),
+        }
+
+
+def _as_coestimated(p: FitParam) -> FitParam:
+    p.role = "coestimated"
+    return p
+
+
+#: The effects, by name, in the order they are offered.
+EFFECTS: dict[str, Effect] = {
+    e.name: e
+    for e in (
+        MeshingEfficiency(),
+        LoadDependentEfficiency(),
+        TemperatureDependentEfficiency(),
+        ViscousFriction(),
+        Backlash(),
+        CoulombFriction(),
+        LoadOffset(),
+    )
 }
 #: The effects in the order they are offered (that of EFFECTS).
 EFFECT_NAMES: tuple[str, ...] = tuple(EFFECTS)
@@ -572,15 +984,11 @@ def get_effect(name: str, model: Any | None = None) -> Effect:
 
 def applicable_effects(model: Any) -> tuple[list[Effect], dict[str, str]]:
     """Candidate effects for the model, and {effect: reason} for those left out."""
-    blk = mk.block_name(model)
     out, skipped = [], {}
     for name, eff in EFFECTS.items():
-        if blk not in eff.blocks:
-            skipped[name] = f"does not apply to the {blk} rig"
-        elif eff.present(model):
-            skipped[name] = "already in the model"
-        elif why := eff.unavailable(model):
-            skipped[name] = str(why)
+        why = eff.applies(model)
+        if why:
+            skipped[name] = why
         else:
             out.append(eff)
     return out, skipped
@@ -589,96 +997,68 @@ def applicable_effects(model: Any) -> tuple[list[Effect], dict[str, str]]:
 # ---------------------------------------------------------------- co-estimation
 
 
+def _present_others(model: Any, effect: Effect | None) -> list[Effect]:
+    """Effects the model has that trade off against `effect` (all present ones
+    but those it replaces)."""
+    replaced = effect.replaces if effect is not None else ()
+    return [
+        e
+        for e in EFFECTS.values()
+        if e is not effect and e.name not in replaced and e.present(model)
+    ]
+
+
 def coestimated(ctx: Any, effect: Effect, screen: Any = None) -> list[FitParam]:
-    """Existing parameters re-estimated together with effect (see module doc)."""
-    model = ctx.model
-    out: list[FitParam] = []
-    if effect.name == "backlash":
-        return out
-    key = mk.driven_inertia_key(model)
-    j0 = float(mk.rig_values(model)[key])
-    j = j0 + _seed(screen, "acceleration", 0.0)
-    j = j if j > 0 else j0
-    unit = "kg*m^2" if key == "follower_inertia" else "kg"
-    out.append(FitParam(key, j, j0 * 1e-3, j0 * 1e3, unit, role="coestimated", before=j0))
-    if _has_visc(model) and effect.name != "viscous_friction":
-        p = _visc_params(ctx, screen)[0]
-        p.role = "coestimated"
-        out.append(p)
-    if (
-        float(mk.rig_values(model)["load_coulomb_friction"]) > 0
-        and effect.name != "coulomb_friction"
-    ):
-        p = _coul_params(ctx, screen)[0]
-        p.role = "coestimated"
-        out.append(p)
-    if float(mk.rig_values(model)["load_offset"]) != 0 and effect.name != "load_offset":
-        p = _offset_params(ctx, screen)[0]
-        p.role = "coestimated"
-        out.append(p)
-    if mk.friction_model(model) == "constant_efficiency" and effect.name not in (
-        "meshing_efficiency",
-        "load_dependent_efficiency",
-        "temperature_dependent_efficiency",
-    ):
-        cur = float(mk.block_values(model)["efficiency_const"])
-        L = (1.0 - cur) + _seed(screen, "mesh", 0.0)
-        out.append(
-            FitParam(
-                "efficiency_const",
-                min(_eff_from_loss(L), 0.999),
-                0.3,
-                1.0,
-                "",
-                role="coestimated",
-                before=cur,
-            )
-        )
+    """Existing parameters re-estimated together with effect: the driven
+    inertia and the present parameters of the effects the model has."""
+    out = [INERTIA.parameter(ctx, screen)]
+    for other in _present_others(ctx.model, effect):
+        out += other.coestimated(ctx, screen)
     return out
 
 
-def nuisance_columns(
-    ctx: Any, effect: Effect | None
-) -> list[tuple[str, np.ndarray, tuple[float, float]]]:
-    """Signature columns of the co-estimated parameters (screening)."""
-    model = ctx.model
-    key = mk.driven_inertia_key(model)
-    j0 = float(mk.rig_values(model)[key])
-    cols = [("acceleration", ctx.columns["acceleration"], (-0.999 * j0, 1e3 * j0))]
-    name = effect.name if effect is not None else ""
-    if name == "backlash":
-        return cols
-    if _has_visc(model) and name != "viscous_friction":
-        cols += _visc_columns(ctx)
-    if float(mk.rig_values(model)["load_coulomb_friction"]) > 0 and name != "coulomb_friction":
-        cols += _coul_columns(ctx)
-    if float(mk.rig_values(model)["load_offset"]) != 0 and name != "load_offset":
-        cols += _offset_columns(ctx)
-    if mk.friction_model(model) == "constant_efficiency" and name not in (
-        "load_dependent_efficiency",
-        "temperature_dependent_efficiency",
-    ):
-        cur = float(mk.block_values(model)["efficiency_const"])
-        cols.append(("mesh", ctx.columns["mesh"], (-(1.0 - cur), 0.7 - (1.0 - cur))))
+def nuisance_columns(ctx: Any, effect: Effect | None) -> list[Column]:
+    """Screening columns of the co-estimated parameters (effect None: the
+    present parameters alone)."""
+    cols = [INERTIA.column(ctx)]
+    for other in _present_others(ctx.model, effect):
+        cols += other.nuisance_columns(ctx)
     return cols
 
 
 def build_changes(ctx: Any, effect: Effect, values: dict[str, float]) -> Changes:
     """Block and rig changes for effect + co-estimated parameter values."""
-    block, rig = effect.build(ctx, values)
-    block = dict(block)
-    rig = dict(rig)
-    model = ctx.model
-    key = mk.driven_inertia_key(model)
+    block: dict[str, Any] = {}
+    rig: dict[str, Any] = {}
+    key = mk.driven_inertia_key(ctx.model)
     if key in values:
         rig[key] = float(values[key])
-    vk = _visc_key(model)
-    if vk in values and effect.name != "viscous_friction":
-        _set_viscous(model, values[vk], block)
-    if "load_coulomb_friction" in values:
-        rig["load_coulomb_friction"] = float(values["load_coulomb_friction"])
-    if "load_offset" in values:
-        rig["load_offset"] = float(values["load_offset"])
-    if "efficiency_const" in values and effect.name != "meshing_efficiency":
-        block["efficiency_const"] = float(values["efficiency_const"])
+    for other in _present_others(ctx.model, effect):
+        b, r = other.build(ctx, values)
+        block.update(b)
+        rig.update(r)
+    b, r = effect.build(ctx, values)
+    block.update(b)
+    rig.update(r)
     return block, rig
+
+
+# ---------------------------------------------------------------- separation
+
+
+def _owner(name: str) -> Any:
+    return INERTIA if name == INERTIA.name else EFFECTS.get(name)
+
+
+def separating_excitation(a: str, b: str) -> str:
+    """The excitation that tells effect (or parameter owner) a from b apart."""
+    ea, eb = _owner(a), _owner(b)
+    for x, y in ((ea, b), (eb, a)):
+        if x is not None and y in x.separated_from:
+            return x.separated_from[y]
+    if a == b and ea is not None:
+        return getattr(ea, "internal_excitation", "") or ea.excitation
+    hints = [e.excitation for e in (ea, eb) if e is not None and e.excitation]
+    if hints:
+        return "; ".join(dict.fromkeys(hints))
+    return "a record that excites them differently"

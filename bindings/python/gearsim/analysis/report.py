@@ -7,8 +7,10 @@ Figures:
   regimes of the first round shaded;
 - ``residual_vs.png``: the drive-torque residual against speed and against
   load, first and last round (the signature plots a person checks);
-- ``regimes.png``: error ratio per regime, first and last round;
-- ``error_fall.png``: nrmse after each round of adding an effect.
+- ``regimes.png``: error per regime, first and last round, with the failing
+  threshold;
+- ``error_fall.png``: nrmse on the estimation and on the validation blocks
+  after each round of adding an effect.
 """
 
 from __future__ import annotations
@@ -24,11 +26,12 @@ from typing import Any
 import numpy as np
 
 from .._outputs import OutputPathError, atomic_write_bytes, atomic_write_text, printable
+from . import scoring
 from .compare import CompareResult, compare
 from .diagnose import DiagnoseResult, diagnose
-from .fitting import FitResult, fit_effect
+from .fitting import FitResult, fit_effect, validation_nrmse
 from .measurement import Measurement
-from .signatures import build_context
+from .regimes import FAILING_RATIO
 from .simulate import prepare_inputs
 
 __all__ = ["Round", "run_rounds", "write_report", "FIGURES"]
@@ -40,14 +43,39 @@ MAX_POINTS = 20_000
 @dataclass
 class Round:
     """One round: the model, the effect added to reach it (None for the
-    starting model), its comparison, the diagnosis that chose the effect and
-    the fit."""
+    starting model), its comparison, its errors on the estimation and the
+    validation blocks, the diagnosis of this model (which chose the next
+    effect, or concluded that nothing helps) and the fit that reached it."""
 
     model: Any
     effect: str | None
     compare: CompareResult
+    estimation_nrmse: float
+    validation_nrmse: float
     diagnosis: DiagnoseResult | None = None
     fit: FitResult | None = None
+
+
+def _round(model: Any, effect: str | None, cur: CompareResult, split, fit=None) -> Round:
+    sim = cur.sim.outputs
+    return Round(
+        model,
+        effect,
+        cur,
+        validation_nrmse(cur.meas, sim, split.estimation),
+        validation_nrmse(cur.meas, sim, split.validation),
+        None,
+        fit,
+    )
+
+
+def _full_fit(d: DiagnoseResult, split, say: Callable[[str], None]) -> FitResult:
+    """The accepted candidate's fit: diagnose's own when it fitted every
+    parameter, else a full fit (optional parameters too) on the same split."""
+    best = d.best
+    if best.fit is not None and best.fit.complete:
+        return best.fit
+    return fit_effect(d.context, best.effect, validation=split, progress=say)
 
 
 def run_rounds(
@@ -56,35 +84,41 @@ def run_rounds(
     rounds: int = 3,
     *,
     input_filter: Any = "auto",
-    min_gain: float = 0.1,
+    validation: bool = True,
+    validation_fraction: float = scoring.DEFAULT_FRACTION,
     progress: Callable[[str], None] | None = None,
 ) -> list[Round]:
-    """Start from model; each round diagnoses, adds the best candidate (full
-    fit) and compares again. Stops early when no candidate lowers the nrmse by
-    at least min_gain (relative). The last round's diagnosis (if any) is kept
-    on it."""
+    """Start from model; each round diagnoses and adds the best candidate
+    when it helps (gearsim.analysis.scoring.helps, the rule diagnose reports
+    with), then compares again. Stops when nothing helps or after `rounds`
+    rounds. The last model's diagnosis (if any) is kept on its round: its
+    conclusion says why the rounds stopped."""
     say = progress or (lambda s: None)
     inputs = prepare_inputs(meas, input_filter)
+    split = scoring.split_record(meas.n, validation, validation_fraction)
     cur = compare(model, meas, inputs)
-    out = [Round(model, None, cur)]
-    say(f"round 0: nrmse {cur.nrmse:.4f}")
+    out = [_round(model, None, cur, split)]
+    say(f"round 0: nrmse {cur.nrmse:.4f}, validation nrmse {out[0].validation_nrmse:.4f}")
     for k in range(1, rounds + 1):
-        d = diagnose(out[-1].model, meas, inputs, progress=say)
+        d = diagnose(
+            out[-1].model,
+            meas,
+            inputs,
+            validation=validation,
+            validation_fraction=validation_fraction,
+            progress=say,
+        )
         out[-1].diagnosis = d
-        best = d.best
-        if best is None or best.nrmse_after > (1.0 - min_gain) * cur.nrmse:
-            say(f"round {k}: no candidate lowers the nrmse by {100 * min_gain:.0f} % - stopping")
+        if not d.best_helps:
+            say(f"round {k}: {d.conclusion} - stopping")
             break
-        say(f"round {k}: adding {best.effect}")
-        if best.fit is not None and best.effect != "backlash":
-            # diagnose fitted it in full already (quick fits differ for backlash only)
-            fr = best.fit
-        else:
-            ctx = build_context(out[-1].model, meas, inputs, cur.sim, cur.regime_masks)
-            fr = fit_effect(ctx, best.effect, progress=say)
+        fr = _full_fit(d, split, say)
         cur = compare(fr.model, meas, inputs)
-        out.append(Round(fr.model, best.effect, cur, None, fr))
-        say(f"round {k}: {best.effect}: nrmse {fr.nrmse_before:.4f} -> {cur.nrmse:.4f}")
+        out.append(_round(fr.model, fr.effect, cur, split, fr))
+        say(
+            f"round {k}: + {fr.effect}: validation nrmse {out[-2].validation_nrmse:.4f} -> "
+            f"{out[-1].validation_nrmse:.4f}"
+        )
     return out
 
 
@@ -258,12 +292,14 @@ def _fig_regimes(plt, meas: Measurement, rounds: list[Round]):
                 fontsize=8,
                 color="#d62728",
             )
+    overall = rounds[0].compare.outputs[o].nrmse
+    ax.axhline(overall, color="#1f77b4", ls=":", lw=1, label="overall, starting model")
     ax.axhline(
-        rounds[0].compare.outputs[o].nrmse,
-        color="#1f77b4",
-        ls=":",
+        FAILING_RATIO * overall,
+        color="#d62728",
+        ls="--",
         lw=1,
-        label="overall, starting model",
+        label=f"fails above {FAILING_RATIO:g}x overall (starting model)",
     )
     ax.set_xticks(x)
     ax.set_xticklabels(names, rotation=30, ha="right", fontsize=8)
@@ -278,16 +314,22 @@ def _fig_regimes(plt, meas: Measurement, rounds: list[Round]):
 def _fig_error_fall(plt, meas: Measurement, rounds: list[Round]):
     fig, ax = plt.subplots(figsize=(8, 3.8))
     labels = ["starting model"] + [f"+ {r.effect}" for r in rounds[1:]]
-    vals = [r.compare.nrmse for r in rounds]
-    x = np.arange(len(vals))
-    ax.bar(x, vals, color=["#1f77b4"] + ["#2ca02c"] * (len(vals) - 1))
-    for i, v in enumerate(vals):
-        ax.annotate(f"{v:.3f}", (x[i], v), ha="center", va="bottom", fontsize=9)
+    x = np.arange(len(rounds))
+    curves = (
+        ("estimation blocks", [r.estimation_nrmse for r in rounds], "#1f77b4", "o"),
+        ("validation blocks (held out)", [r.validation_nrmse for r in rounds], "#d62728", "s"),
+    )
+    for label, vals, color, marker in curves:
+        ax.plot(x, vals, color=color, marker=marker, label=label)
+        for i, v in enumerate(vals):
+            ax.annotate(f"{v:.3f}", (x[i], v), ha="center", va="bottom", fontsize=8, color=color)
     ax.set_xticks(x)
     ax.set_xticklabels(labels, rotation=15, ha="right", fontsize=9)
     ax.set_ylabel("nrmse (mean over outputs)")
+    ax.set_ylim(bottom=0)
     ax.set_title("error fall across rounds of adding effects")
     ax.grid(axis="y", alpha=0.3)
+    ax.legend(fontsize=8)
     fig.tight_layout()
     return fig
 
@@ -348,25 +390,10 @@ def _html(meas: Measurement, rounds: list[Round], images: dict[str, bytes], titl
     )
     h.append(
         f"<p>Measurement <code>{_e(meas.path)}</code>: {meas.n} samples, dt = {meas.dt:.6g} s, "
-        f"{meas.spec.block} rig. Simulation: open loop, the measured inputs drive the C rig "
-        "from the "
-        f"first sample. Input filter cut-offs (zero phase): {_e(cut)}.</p>"
+        f"{meas.spec.block} rig. Simulation: open loop, the measured inputs drive the C rig from "
+        f"the first sample. Input filter cut-offs (zero phase): {_e(cut)}.</p>"
     )
-    # summary of rounds
-    h.append(
-        "<h2>Error across rounds</h2><table><tr><th class='l'>round</th><th "
-        "class='l'>effect added</th>"
-        + "".join(f"<th>nrmse {_e(o)}</th>" for o in meas.spec.outputs)
-        + "<th>nrmse</th><th>fit %</th></tr>"
-    )
-    for i, r in enumerate(rounds):
-        h.append(
-            f"<tr><td class='l'>{i}</td><td class='l'>{_e(r.effect or 'starting model')}</td>"
-            + "".join(f"<td>{_num(r.compare.outputs[o].nrmse)}</td>" for o in meas.spec.outputs)
-            + f"<td><b>{_num(r.compare.nrmse)}</b></td>"
-            + f"<td>{_num(100 * (1 - r.compare.nrmse), '.2f')}</td></tr>"
-        )
-    h.append("</table>")
+    h.append(_rounds_table(meas, rounds))
     if "error_fall" in images:
         h.append(_img(images["error_fall"], "error fall"))
     h.append("<h2>Measured vs simulated</h2>")
@@ -377,79 +404,124 @@ def _html(meas: Measurement, rounds: list[Round], images: dict[str, bytes], titl
     h.append(_img(images["regimes"], "regimes"))
     h.append(_img(images["residual_vs"], "residual signatures"))
     for i, r in enumerate(rounds):
-        d = r.diagnosis
-        if d is not None:
-            h.append(f"<h2>Diagnosis of round {i} model (nrmse {_num(d.baseline_nrmse)})</h2>")
-            h.append(
-                "<table><tr><th>rank</th><th class='l'>effect</th><th>nrmse after</th><th "
-                "class='l'>how</th>"
-                "<th class='l'>parameters</th><th class='l'>evidence from the residual</th></tr>"
-            )
-            for k, c in enumerate(d.candidates, 1):
-                h.append(
-                    f"<tr><td>{k}</td><td "
-                    f"class='l'><b>{_e(c.effect)}</b></td><td>{_num(c.nrmse_after)}</td>"
-                    f"<td class='l'>{_e(c.method)}</td><td class='l'>{_params(c.parameters)}</td>"
-                    f"<td class='l'>{_e(c.evidence.get('text', ''))}</td></tr>"
-                )
-            h.append("</table>")
-            if d.skipped:
-                h.append(
-                    "<p class='small'>Not candidates: "
-                    + "; ".join(f"{_e(k)} ({_e(v)})" for k, v in d.skipped.items())
-                    + "</p>"
-                )
+        if r.diagnosis is not None:
+            h.append(_diagnosis_html(i, r.diagnosis))
         if i + 1 < len(rounds) and rounds[i + 1].fit is not None:
-            f = rounds[i + 1].fit
-            h.append(
-                f"<h2>Round {i + 1}: fit of {_e(f.effect)}: nrmse {_num(f.nrmse_before)} &rarr; "
-                f"{_num(f.nrmse_after)}</h2>"
-            )
-            h.append(
-                "<table><tr><th class='l'>parameter</th><th>value</th><th>std</th><th>before</th>"
-                "<th class='l'>role</th></tr>"
-            )
-            for p in f.fitted:
-                h.append(
-                    "<tr><td "
-                    f"class='l'>{_e(p['name'])}</td><td>{_num(p['value'])}</td><td>{_num(p['std'])}</td>"
-                    f"<td>{_num(p['before']) if p['before'] is not None else ''}</td>"
-                    f"<td class='l'>{_e(p['role'])}</td></tr>"
-                )
-            h.append("</table>")
-            for w in f.warnings:
-                h.append(f"<p class='warn'>warning: {_e(w)}</p>")
-            for n in f.notes:
-                h.append(f"<p class='small'>note: {_e(n)}</p>")
+            h.append(_fit_html(i + 1, rounds[i + 1].fit))
     h.append(
         "<p class='small'>nrmse = rms(measured - simulated) / std(measured) per output; the "
-        "overall nrmse "
-        "is their mean (docs/measurement-format.md). Standard deviations come from the "
-        "Jacobian and "
-        "are lower bounds when the residual is correlated in time.</p></body></html>"
+        "overall nrmse is their mean (docs/measurement-format.md). Validation: the record is cut "
+        "into 10 contiguous blocks, the held-out ones never enter a fit; score: BIC on the "
+        "estimation blocks with an effective sample count (docs/analysis.md). Standard "
+        "deviations come from the Jacobian and are lower bounds when the residual is "
+        "correlated in time.</p></body></html>"
     )
     return "\n".join(h)
+
+
+def _rounds_table(meas: Measurement, rounds: list[Round]) -> str:
+    outs = meas.spec.outputs
+    h = [
+        "<h2>Error across rounds</h2><table><tr><th class='l'>round</th>"
+        "<th class='l'>effect added</th>"
+        + "".join(f"<th>nrmse {_e(o)}</th>" for o in outs)
+        + "<th>nrmse</th><th>estimation nrmse</th><th>validation nrmse</th><th>fit %</th></tr>"
+    ]
+    for i, r in enumerate(rounds):
+        h.append(
+            f"<tr><td class='l'>{i}</td><td class='l'>{_e(r.effect or 'starting model')}</td>"
+            + "".join(f"<td>{_num(r.compare.outputs[o].nrmse)}</td>" for o in outs)
+            + f"<td><b>{_num(r.compare.nrmse)}</b></td><td>{_num(r.estimation_nrmse)}</td>"
+            + f"<td><b>{_num(r.validation_nrmse)}</b></td>"
+            + f"<td>{_num(100 * (1 - r.compare.nrmse), '.2f')}</td></tr>"
+        )
+    h.append("</table>")
+    last = rounds[-1].diagnosis
+    if last is not None and not last.best_helps:
+        h.append(f"<p><b>{_e(last.conclusion)}</b></p>")
+    return "".join(h)
+
+
+def _method(c: Any) -> str:
+    return "fit" if c.method == "fit" else "screening estimate"
+
+
+def _diagnosis_html(i: int, d: DiagnoseResult) -> str:
+    h = [
+        f"<h2>Diagnosis of the round {i} model (nrmse {_num(d.baseline_nrmse)}, validation "
+        f"{_num(d.validation_baseline_nrmse)}, score {_num(d.baseline_score, '.1f')})</h2>",
+        "<table><tr><th>rank</th><th class='l'>effect</th><th>score</th><th class='l'>method</th>"
+        "<th>nrmse after</th><th>validation nrmse</th><th class='l'>helps</th>"
+        "<th class='l'>parameters</th><th class='l'>evidence from the residual</th></tr>",
+    ]
+    for k, c in enumerate(d.candidates, 1):
+        tie = f" (within the noise of {', '.join(c.tied_with)})" if c.tied_with else ""
+        h.append(
+            f"<tr><td>{k}</td><td class='l'><b>{_e(c.effect)}</b></td>"
+            f"<td>{_num(c.score, '.1f')}</td><td class='l'>{_method(c)}</td>"
+            f"<td>{_num(c.nrmse_after)}</td><td>{_num(c.validation_nrmse_after)}</td>"
+            f"<td class='l'>{'yes' if c.helps else 'no'}{_e(tie)}</td>"
+            f"<td class='l'>{_params(c.parameters)}</td>"
+            f"<td class='l'>{_e(c.evidence.get('text', ''))}</td></tr>"
+        )
+    h.append("</table>")
+    h.append(
+        "<p class='small'>Sorted by score (lower is better); screening estimates follow the "
+        "fitted candidates.</p>"
+    )
+    for w in d.warnings:
+        h.append(f"<p class='warn'>warning: {_e(w['text'])}</p>")
+    h.append(f"<p><b>{_e(d.conclusion)}</b></p>")
+    if d.skipped:
+        h.append(
+            "<p class='small'>Not candidates: "
+            + "; ".join(f"{_e(k)} ({_e(v)})" for k, v in d.skipped.items())
+            + "</p>"
+        )
+    return "".join(h)
+
+
+def _fit_html(k: int, f: FitResult) -> str:
+    h = [
+        f"<h2>Round {k}: fit of {_e(f.effect)}: nrmse {_num(f.nrmse_before)} &rarr; "
+        f"{_num(f.nrmse_after)}, validation {_num(f.validation_nrmse_before)} &rarr; "
+        f"{_num(f.validation_nrmse_after)}</h2>",
+        "<table><tr><th class='l'>parameter</th><th>value</th><th>std</th><th>before</th>"
+        "<th class='l'>role</th></tr>",
+    ]
+    for p in f.fitted:
+        before = _num(p["before"]) if p["before"] is not None else ""
+        h.append(
+            f"<tr><td class='l'>{_e(p['name'])}</td><td>{_num(p['value'])}</td>"
+            f"<td>{_num(p['std'])}</td><td>{before}</td><td class='l'>{_e(p['role'])}</td></tr>"
+        )
+    h.append("</table>")
+    h += [f"<p class='warn'>warning: {_e(w['text'])}</p>" for w in f.warnings]
+    h += [f"<p class='small'>note: {_e(n)}</p>" for n in f.notes]
+    return "".join(h)
 
 
 def _regime_table(c: CompareResult, meas: Measurement) -> str:
     outs = meas.spec.outputs
     rows = [
+        f"<p>A regime fails when an output's error in it is at least {FAILING_RATIO:g}x its "
+        "overall error (and it holds at least 1 % of the samples).</p>"
         "<table><tr><th class='l'>regime</th><th class='l'>definition</th><th>share</th>"
         + "".join(f"<th>{_e(o)} nrmse (x overall)</th>" for o in outs)
-        + "</tr>"
+        + f"<th class='l'>fails (&ge; {FAILING_RATIO:g}x)</th></tr>"
     ]
     for r in c.regimes:
         cls = " class='fail'" if r["failing"] else ""
         rows.append(
-            f"<tr{cls}><td class='l'>{_e(r['regime'])}</td><td "
-            f"class='l'>{_e(r['description'])}</td>"
+            f"<tr{cls}><td class='l'>{_e(r['regime'])}</td>"
+            f"<td class='l'>{_e(r['description'])}</td>"
             f"<td>{100 * r['fraction']:.1f} %</td>"
             + "".join(
                 f"<td>{_num(r['outputs'][o]['nrmse'])} "
                 f"({_num(r['outputs'][o]['ratio'], '.2f')}x)</td>"
                 for o in outs
             )
-            + "</tr>"
+            + f"<td class='l'>{'fails' if r['failing'] else ''}</td></tr>"
         )
     rows.append("</table>")
     return "".join(rows)
@@ -482,8 +554,6 @@ def write_report(
     images: dict[str, bytes] = {}
     paths = []
     for name in FIGURES:
-        if name == "error_fall" and len(rounds) < 2:
-            continue
         fig = _DRAW[name](plt, meas, rounds)
         buf = io.BytesIO()
         fig.savefig(buf, format="png", dpi=100)

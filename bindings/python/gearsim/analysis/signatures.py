@@ -300,6 +300,7 @@ class BacklashEvidence:
     mask: np.ndarray
 
     speed_output: str = ""
+    gap_range: tuple[float, float] = (0.0, 0.0)  # m: smallest and largest gap of the upper cluster
 
     @property
     def strength(self) -> float:
@@ -390,8 +391,13 @@ def backlash_evidence(ctx: Context) -> BacklashEvidence:
     # median of the upper cluster
     disp = np.array([abs(float(np.sum(rs[e : e + window]) * dt)) for e in events])
     gap = 0.0
+    gap_range = (0.0, 0.0)
     if disp.size:
+        radius = mk.driven_radius(ctx.model)
         upper = disp[disp >= 0.5 * np.percentile(disp, 90)]
-        gap = float(np.median(upper)) * mk.driven_radius(ctx.model)
+        gap = float(np.median(upper)) * radius
+        gap_range = (float(upper.min()) * radius, float(upper.max()) * radius)
     pred = ctx.overall_nrmse(after[ctx.torque_output], after[ctx.speed_output])
-    return BacklashEvidence(events, window, conc, frac, gap, pred, mask, ctx.speed_output)
+    return BacklashEvidence(
+        events, window, conc, frac, gap, pred, mask, ctx.speed_output, gap_range
+    )
