@@ -652,3 +652,102 @@ def test_cli_header_only(tmp_path, demo_bytes):
     p = run_cli("compare", f, "--model", MODEL)
     cli_bad(p, "h.csv", "no data rows")
     assert b"Warning" not in p.stderr
+
+
+# ------------------------------------------------- input conditioning: held inputs
+
+
+def _held_staircase(n: int, hold: int, seed: int) -> np.ndarray:
+    """A command held for `hold` samples at a time, at 0.01 resolution (as a
+    DBC signal): a smooth profile sampled every `hold` samples."""
+    k = np.arange(n) // hold * hold
+    smooth = 20.0 * np.sin(2 * np.pi * k / 400.0) + 5.0 + np.random.default_rng(seed).normal(0, 0.3)
+    return np.round(smooth, 2)
+
+
+def test_a_held_input_is_fed_as_it_is_and_matches_its_own_model():
+    """A zero-order-hold command (a CSV converted from a HIL log) must reach the
+    rig unfiltered under the default input filter: the model that made the
+    record then compares to within rounding."""
+    import gearsim
+    from gearsim.analysis import Measurement, compare, prepare_inputs
+
+    dt, n = 1e-3, 1200
+    speed = _held_staircase(n, 10, 1)
+    load = np.round(0.4 * np.sin(2 * np.pi * (np.arange(n) // 10 * 10) / 230.0), 3)
+    model = gearsim.Model("simple_gear", {"teeth_ratio": 2.0}, {"follower_inertia": 0.02})
+    out = model.rig(dt=dt).run(base_speed=speed, load=load)
+    meas = Measurement.from_arrays(
+        "simple_gear",
+        np.arange(n) * dt,
+        base_speed=speed,
+        load_torque=load,
+        base_torque=np.asarray(out.base_torque),
+        follower_speed=np.asarray(out.follower_speed),
+    )
+    inputs = prepare_inputs(meas)
+    assert inputs.cutoffs == {"base_speed": None, "load_torque": None}
+    assert np.array_equal(inputs.base_speed, speed)
+    assert compare(model, meas).nrmse < 1e-9
+
+
+def test_a_quantized_encoder_speed_is_not_taken_for_a_held_input():
+    """An encoder speed at low speed toggles between neighbouring counts: many
+    repeats, but the changes are single counts. It is filtered."""
+    from gearsim.analysis.signals import is_held
+
+    quantum = 0.1  # rad/s per count and sample
+    t = np.arange(5000) * 1e-3
+    true_angle = 0.01 * t + 0.001 * np.sin(2 * np.pi * 0.5 * t)  # rad: ~0.1 count a sample
+    counts = np.floor(true_angle / (quantum * 1e-3))
+    speed = np.diff(counts, prepend=counts[0]) * quantum
+    assert np.mean(np.diff(speed) == 0) > 0.5  # it repeats as much as a held input
+    assert not is_held(speed)
+    assert is_held(_held_staircase(5000, 10, 2))
+    assert not is_held(np.sin(t))  # a smooth signal never repeats
+
+
+def _encoder_measurement():
+    """A gear record whose base speed comes from a 16-bit encoder at 1 kHz."""
+    from gearsim.analysis import Measurement
+
+    dt, n = 1e-3, 8000
+    t = np.arange(n) * dt
+    angle = 3.0 * (1 - np.cos(2 * np.pi * 0.4 * t)) + 0.5 * np.sin(2 * np.pi * 7.0 * t)
+    quantum = 2 * np.pi / 65536
+    counts = np.floor(angle / quantum)
+    speed = np.diff(counts, prepend=counts[0]) * quantum / dt
+    load = np.sin(2 * np.pi * 0.3 * t)
+    return Measurement.from_arrays(
+        "simple_gear",
+        t,
+        base_speed=speed,
+        load_torque=load,
+        base_torque=0.1 * load,
+        follower_speed=-speed / 2,
+    )
+
+
+def test_a_backlash_contact_gets_its_own_wider_speed_filter():
+    """The contact integrates the speed, the rigid rig differentiates it: on an
+    encoder speed the contact's cut-off is wider (at most fs/4), listed with
+    the others, and only a model with backlash is driven by it."""
+    import gearsim
+    from gearsim.analysis import prepare_inputs
+    from gearsim.analysis.signals import auto_cutoff, contact_cutoff
+
+    meas = _encoder_measurement()
+    rigid_hz = auto_cutoff(meas["base_speed"], 1000.0)
+    contact_hz = contact_cutoff(meas["base_speed"], 1000.0)
+    assert rigid_hz < contact_hz <= 250.0
+    inputs = prepare_inputs(meas)
+    assert inputs.cutoffs["base_speed"] == rigid_hz
+    assert inputs.cutoffs["base_speed (backlash contact)"] == contact_hz
+    rigid = gearsim.Model("simple_gear", {"teeth_ratio": 2.0}, {})
+    with_backlash = rigid.replace(block_params={"backlash_enabled": True})
+    assert inputs.speed_for(rigid) is inputs.base_speed
+    assert inputs.speed_for(with_backlash) is inputs.contact_speed
+    # the wider filter keeps more of the 7 Hz wobble's derivative and more noise
+    assert np.std(np.diff(inputs.contact_speed)) > np.std(np.diff(inputs.base_speed))
+    for fixed in (None, 25.0):
+        assert prepare_inputs(meas, fixed).contact_speed is None

@@ -11,7 +11,19 @@ numpy only (no scipy import on the ``compare`` path).
 is the median power density in the upper half of the band; the cut-off is twice
 the highest frequency whose (smoothed) density still stands 30x above that
 floor, clamped to [fs/500, fs/8]. Quantized or noisy speeds get filtered where
-they are only noise; clean signals are barely touched.
+they are only noise; clean signals are barely touched. ``contact_cutoff`` is
+the cut-off for a speed that drives a backlash contact rather than a rigid
+mesh (3x instead of 30x, clamped to [the rigid cut-off, fs/4]; see there).
+
+``is_held`` recognises a held input: a command recorded with a zero-order
+hold (a CSV converted from a HIL log, a setpoint logged at a slower rate than
+the samples) is a staircase whose steps are the signal itself, not noise.
+Filtering would smear every step over the filter's length and feed the rig
+inputs it never saw, so the automatic choice leaves such an input alone. A
+held input has at least ``HELD_REPEAT_FRACTION`` of its consecutive samples
+exactly equal, and its changes are not mostly a single smallest step (that is
+what a quantized sensor at low speed looks like: an encoder toggling between
+two neighbouring counts).
 
 ``sampling_gaps`` finds the holes of a time axis (runs of missing samples of
 the median step), so that resampling can refuse to invent data across a long
@@ -27,6 +39,9 @@ import numpy as np
 __all__ = [
     "zero_phase_lowpass",
     "auto_cutoff",
+    "contact_cutoff",
+    "is_held",
+    "HELD_REPEAT_FRACTION",
     "derivative",
     "smooth_sign",
     "Gap",
@@ -81,25 +96,75 @@ def _psd(x: np.ndarray, fs_hz: float, nseg: int = 1024) -> tuple[np.ndarray, np.
     return np.fft.rfftfreq(nseg, d=1.0 / fs_hz), p
 
 
-def auto_cutoff(x: np.ndarray, fs_hz: float) -> float | None:
-    """Cut-off (Hz) that separates x from its broadband noise, or None when x is
-    constant. See the module docstring for the rule."""
+#: density above the high-band floor that still counts as signal, and the
+#: upper clamp (fraction of fs): for the rigid rig, which differentiates the
+#: speed, and for a backlash contact, which does not (see contact_cutoff)
+RIGID_SIGNAL_RATIO, RIGID_MAX_FRACTION = 30.0, 1.0 / 8.0
+CONTACT_SIGNAL_RATIO, CONTACT_MAX_FRACTION = 3.0, 1.0 / 4.0
+
+
+def _cutoff(x: np.ndarray, fs_hz: float, signal_ratio: float, max_fraction: float) -> float | None:
+    """Twice the highest frequency whose smoothed density stands
+    `signal_ratio` times above the high-band floor, clamped to
+    [fs/500, max_fraction*fs]; None for a constant x."""
     x = np.asarray(x, dtype=float)
     if x.size < 64 or float(np.ptp(x)) == 0.0:
         return None
     f, p = _psd(x, fs_hz)
     upper = f >= 0.5 * f[-1]
     floor = float(np.median(p[upper]))
-    lo, hi = fs_hz / 500.0, fs_hz / 8.0
+    lo, hi = fs_hz / 500.0, fs_hz * max_fraction
     if floor <= 0.0:
         return hi
     # light smoothing of the density over 5 bins
     ps = np.convolve(p, np.ones(5) / 5.0, mode="same")
-    above = np.nonzero(ps > 30.0 * floor)[0]
+    above = np.nonzero(ps > signal_ratio * floor)[0]
     if above.size == 0:
         return lo
     f_sig = float(f[above[-1]])
     return float(min(max(2.0 * f_sig, lo), hi))
+
+
+def auto_cutoff(x: np.ndarray, fs_hz: float) -> float | None:
+    """Cut-off (Hz) that separates x from its broadband noise, or None when x is
+    constant. See the module docstring for the rule."""
+    return _cutoff(x, fs_hz, RIGID_SIGNAL_RATIO, RIGID_MAX_FRACTION)
+
+
+def contact_cutoff(x: np.ndarray, fs_hz: float) -> float | None:
+    """Cut-off (Hz) for a speed that drives a backlash contact: twice the
+    highest frequency still 3x above the high-band floor, in [the rigid
+    cut-off, fs/4]. The rigid rig differentiates the speed for the inertia
+    torque, which multiplies the noise by the frequency, so it cuts where the
+    signal is still 30x above the noise. A contact integrates the speed into
+    the tooth position, and the driven inertia sits behind the contact
+    spring, which filters its acceleration itself: only the band where an
+    encoder's quantization noise (rising with frequency) outweighs the motion
+    needs to go, and the impacts' fast content stays."""
+    rigid = auto_cutoff(x, fs_hz)
+    if rigid is None:
+        return None
+    contact = _cutoff(x, fs_hz, CONTACT_SIGNAL_RATIO, CONTACT_MAX_FRACTION)
+    return max(rigid, contact if contact is not None else rigid)
+
+
+HELD_REPEAT_FRACTION = 0.5
+
+
+def is_held(x: np.ndarray) -> bool:
+    """True when x is a zero-order-hold staircase (see the module docstring):
+    most consecutive samples repeat exactly, and fewer than half of the
+    changes are the smallest step (a quantized sensor's toggling)."""
+    x = np.asarray(x, dtype=float)
+    if x.size < 3:
+        return False
+    steps = np.abs(np.diff(x))
+    changes = steps[steps > 0.0]
+    if changes.size == 0 or 1.0 - changes.size / steps.size < HELD_REPEAT_FRACTION:
+        return False
+    smallest = float(np.min(changes))
+    single = np.abs(changes - smallest) <= 1e-9 * max(smallest, float(np.max(np.abs(x))))
+    return float(np.mean(single)) < 0.5
 
 
 def derivative(x: np.ndarray, dt: float) -> np.ndarray:

@@ -11,7 +11,12 @@ through a zero-phase low-pass (:func:`gearsim.analysis.signals.zero_phase_lowpas
 4th-order Butterworth magnitude squared) whose cut-off is chosen from the
 input's own spectrum (:func:`gearsim.analysis.signals.auto_cutoff`). Pass
 ``input_filter=None`` to feed the raw samples, or a number (Hz) to fix the
-cut-off for every input.
+cut-off for every input. With "auto", an input recorded as a zero-order-hold
+staircase (:func:`gearsim.analysis.signals.is_held`, e.g. a command from a HIL
+log) is fed as it is: its steps are what the rig saw. A model with backlash
+gets the measured speed through a wider filter
+(:func:`gearsim.analysis.signals.contact_cutoff`): its contact integrates the
+speed instead of differentiating it, so the impacts keep their fast content.
 """
 
 from __future__ import annotations
@@ -23,8 +28,9 @@ from typing import Any
 import numpy as np
 
 from ..columns import AMBIENT_TEMPERATURE, TEMPERATURE
+from . import modelkit as mk
 from .measurement import Measurement
-from .signals import auto_cutoff, zero_phase_lowpass
+from .signals import auto_cutoff, contact_cutoff, is_held, zero_phase_lowpass
 
 __all__ = ["Inputs", "prepare_inputs", "Simulation", "simulate", "simulate_outputs"]
 
@@ -33,7 +39,10 @@ __all__ = ["Inputs", "prepare_inputs", "Simulation", "simulate", "simulate_outpu
 class Inputs:
     """Rig inputs derived from a measurement (SI units, one value per sample).
 
-    cutoffs: input column -> cut-off (Hz) applied, or None when unfiltered."""
+    cutoffs: input column -> cut-off (Hz) applied, or None when unfiltered;
+    plus "<speed column> (backlash contact)" when contact_speed is set.
+    contact_speed: the base speed for a model with backlash, when its
+    conditioning differs from base_speed's (None: the same)."""
 
     base_speed: np.ndarray
     load: np.ndarray
@@ -41,6 +50,14 @@ class Inputs:
     ambient_temperature: np.ndarray | None
     dt: float
     cutoffs: Mapping[str, float | None] = field(default_factory=dict)
+    contact_speed: np.ndarray | None = None
+
+    def speed_for(self, model: Any) -> np.ndarray:
+        """The base speed that drives `model`'s rig: contact_speed for a
+        model with backlash, base_speed otherwise."""
+        if self.contact_speed is not None and mk.block_values(model).get("backlash_enabled"):
+            return self.contact_speed
+        return self.base_speed
 
     def slice(self, start: int, stop: int) -> Inputs:
         def s(x):
@@ -53,20 +70,24 @@ class Inputs:
             s(self.ambient_temperature),
             self.dt,
             self.cutoffs,
+            s(self.contact_speed),
         )
 
 
 def prepare_inputs(meas: Measurement, input_filter: float | str | None = "auto") -> Inputs:
     """Rig inputs of a measurement, conditioned by the zero-phase input filter.
 
-    input_filter: "auto" (cut-off per input from its spectrum), a cut-off in
-    Hz for every input, or None (raw samples)."""
+    input_filter: "auto" (cut-off per input from its spectrum; held inputs
+    unfiltered), a cut-off in Hz for every input, or None (raw samples)."""
     fs = 1.0 / meas.dt
     cutoffs: dict[str, float | None] = {}
 
     def cond(name: str) -> np.ndarray:
         x = meas[name]
         if input_filter is None or input_filter == "none":
+            cutoffs[name] = None
+            return x
+        if input_filter == "auto" and is_held(x):
             cutoffs[name] = None
             return x
         fc = auto_cutoff(x, fs) if input_filter == "auto" else float(input_filter)
@@ -78,10 +99,16 @@ def prepare_inputs(meas: Measurement, input_filter: float | str | None = "auto")
 
     spec = meas.spec
     speed = cond(spec.speed_input)
+    contact = None
+    if input_filter == "auto" and cutoffs[spec.speed_input] is not None:
+        fc = contact_cutoff(meas[spec.speed_input], fs)
+        if fc is not None and fc > cutoffs[spec.speed_input]:
+            cutoffs[f"{spec.speed_input} (backlash contact)"] = fc
+            contact = zero_phase_lowpass(meas[spec.speed_input], fc, fs)
     load = cond(spec.load_input)
     temp = cond(TEMPERATURE.name) if meas.has_temperature else None
     amb = cond(AMBIENT_TEMPERATURE.name) if meas.has_ambient else None
-    return Inputs(speed, load, temp, amb, meas.dt, cutoffs)
+    return Inputs(speed, load, temp, amb, meas.dt, cutoffs, contact)
 
 
 @dataclass
@@ -120,7 +147,7 @@ def _run(model: Any, meas: Measurement, inputs: Inputs) -> tuple[Any, dict[str, 
     # output is compared with: gearsim.columns, shared with the HIL recording
     cols = meas.spec.columns
     given = {
-        cols.speed_input: inputs.base_speed,
+        cols.speed_input: inputs.speed_for(model),
         cols.load_input: inputs.load,
         AMBIENT_TEMPERATURE: inputs.ambient_temperature,
         TEMPERATURE: inputs.measured_temperature,
