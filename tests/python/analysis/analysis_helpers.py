@@ -16,6 +16,20 @@ from gearsim.analysis import synthetic as S
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 EMPS = os.path.normpath(os.path.join(REPO, "..", "shared", "data", "emps", "DATA_EMPS.mat"))
 
+#: The effect names of the measurement format (docs/measurement-format.md
+#: section 3), written out here as the tests' own copy of the contract:
+#: implemented ones, then those reserved for a later issue.
+CONTRACT_EFFECTS = (
+    "meshing_efficiency",
+    "load_dependent_efficiency",
+    "temperature_dependent_efficiency",
+    "viscous_friction",
+    "backlash",
+    "coulomb_friction",
+    "load_offset",
+)
+RESERVED_EFFECTS = ("sensor_delay", "stribeck_friction", "compliance", "torque_ripple")
+
 SAMPLES = 10_000
 DT = 1e-3
 

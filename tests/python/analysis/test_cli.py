@@ -11,6 +11,7 @@ import subprocess
 import sys
 
 import pytest
+from analysis_helpers import CONTRACT_EFFECTS
 
 import gearsim
 
@@ -69,15 +70,7 @@ def test_diagnose_json(gear_csv):
     cands = out["candidates"]
     assert cands and cands[0]["effect"] == "coulomb_friction"
     for c in cands:
-        assert c["effect"] in {
-            "meshing_efficiency",
-            "load_dependent_efficiency",
-            "temperature_dependent_efficiency",
-            "viscous_friction",
-            "backlash",
-            "coulomb_friction",
-            "load_offset",
-        }
+        assert c["effect"] in CONTRACT_EFFECTS
         assert finite(c["nrmse_after"]) and isinstance(c["parameters"], dict)
         assert finite(c["score"]) and c["method"] in ("fit", "screening")
         assert finite(c["validation_nrmse_after"]) and isinstance(c["helps"], bool)

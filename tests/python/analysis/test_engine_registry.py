@@ -8,23 +8,12 @@ import os
 import re
 
 import pytest
-from analysis_helpers import REPO
+from analysis_helpers import CONTRACT_EFFECTS, REPO, RESERVED_EFFECTS
 
 from gearsim.analysis import EFFECT_NAMES, EFFECTS
 from gearsim.analysis.effects import Effect, get_effect
 from gearsim.analysis.errors import EffectError
 
-#: docs/measurement-format.md section 3: implemented, and reserved for later
-CONTRACT = (
-    "meshing_efficiency",
-    "load_dependent_efficiency",
-    "temperature_dependent_efficiency",
-    "viscous_friction",
-    "backlash",
-    "coulomb_friction",
-    "load_offset",
-)
-RESERVED = ("sensor_delay", "stribeck_friction", "compliance", "torque_ripple")
 ANALYSIS = os.path.join(REPO, "bindings", "python", "gearsim", "analysis")
 ENGINE = ("diagnose.py", "fitting.py", "report.py", "scoring.py", "identifiability.py")
 
@@ -36,13 +25,13 @@ def _subclasses(cls):
 
 
 def test_every_contract_effect_has_exactly_one_class():
-    assert EFFECT_NAMES == CONTRACT
+    assert EFFECT_NAMES == CONTRACT_EFFECTS
     classes = list(_subclasses(Effect))
-    for name in CONTRACT:
+    for name in CONTRACT_EFFECTS:
         owners = [c for c in classes if c.name == name]
         assert len(owners) == 1, (name, owners)
         assert isinstance(EFFECTS[name], owners[0])
-    for name in RESERVED:
+    for name in RESERVED_EFFECTS:
         assert name not in EFFECTS
         with pytest.raises(EffectError, match="unknown effect"):
             get_effect(name)
@@ -57,6 +46,6 @@ def test_every_class_says_what_separates_it():
 def test_no_effect_name_tests_in_the_engine(filename):
     with open(os.path.join(ANALYSIS, filename), encoding="utf-8") as f:
         source = f.read()
-    names = "|".join(CONTRACT)
+    names = "|".join(CONTRACT_EFFECTS)
     found = re.findall(rf"[\"']({names})[\"']", source)
     assert found == [], f"{filename} names effects: {found}"

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from analysis_helpers import base_model, measurement
+from analysis_helpers import CONTRACT_EFFECTS, base_model, measurement
 
 from gearsim.analysis import EFFECT_NAMES, Measurement, MeasurementError, compare, load_measurement
 from gearsim.analysis.effects import applicable_effects, get_effect
@@ -127,15 +127,7 @@ def test_failing_regime_stands_out():
 
 
 def test_effect_table():
-    assert EFFECT_NAMES == (
-        "meshing_efficiency",
-        "load_dependent_efficiency",
-        "temperature_dependent_efficiency",
-        "viscous_friction",
-        "backlash",
-        "coulomb_friction",
-        "load_offset",
-    )
+    assert EFFECT_NAMES == CONTRACT_EFFECTS
     gear, rack = base_model("simple_gear"), base_model("rack_pinion")
     assert len(applicable_effects(gear)[0]) == 7
     assert [e.name for e in applicable_effects(rack)[0]] == [
