@@ -24,6 +24,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 __all__ = [
+    "RIG_TIME_MARKER",
+    "INPUTS_SINCE",
+    "BEFORE_SUFFIX",
     "Column",
     "RigColumns",
     "TIME",
@@ -97,6 +100,15 @@ class RigColumns:
                 return col
         return None
 
+
+#: Start of the first line of a CSV written by ``gearsim hil to-csv``: how its
+#: rows were made (``time_base=rig rig_dt=H held=COLUMNS`` or ``time_base=wall``;
+#: docs/measurement-format.md section 1.7).
+RIG_TIME_MARKER = "# gearsim hil to-csv:"
+#: Column of a rig-time CSV: the time (s) from which each row's inputs were applied.
+INPUTS_SINCE = "inputs_since"
+#: Suffix of the column holding a held input's value before ``inputs_since``.
+BEFORE_SUFFIX = "_before"
 
 TIME = Column("time", "s", "time", None, None, "when the sample was taken")
 

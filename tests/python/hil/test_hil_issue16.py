@@ -258,17 +258,15 @@ def test_wall_clock_log_is_converted_with_a_warning(
     assert out.read_text().splitlines()[0] == "# gearsim hil to-csv: time_base=wall"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="needs the analysis to read the to-csv marker (step the model at rig_dt with "
-    "the held inputs and inputs_since; leave held inputs unfiltered): lead integration",
-)
+@pytest.mark.parametrize("offsets", [(0, 10), (4, 14), (9, 19), (9, 10)])
 def test_compare_with_default_options_reproduces_the_rig(
-    tmp_path: Path, capsys: pytest.CaptureFixture
+    tmp_path: Path, capsys: pytest.CaptureFixture, offsets: tuple[int, ...]
 ) -> None:
+    """Issue 16's loop: hil run --log -> to-csv -> compare, default options,
+    wherever in the feedback interval the commands arrived."""
     pytest.importorskip("gearsim.analysis")
     log = tmp_path / "bench.blf"
-    _session_in_rig_time(log, 1.5, (4, 14))
+    _session_in_rig_time(log, 1.5, offsets)
     out, toml = tmp_path / "bench.csv", tmp_path / "model.toml"
     gear_model().save(toml)
     assert main(["hil", "to-csv", str(log), "--rig", "gear", "-o", str(out)]) == 0

@@ -140,8 +140,11 @@ def test_analysis_judges_the_model_against_the_recording(
     path = tmp_path / "bench.csv"
     write_csv(path, rec)
     meas = analysis.load_measurement(str(path), "simple_gear")
-    # noise-free data with step inputs: no input filter, so that the model sees what the rig saw
-    result = analysis.compare(model, meas, input_filter=None)
+    # default options: the first line tells the analysis to feed the held
+    # inputs as the rig applied them, unfiltered, one rig step per row here
+    assert meas.time_base.is_rig and meas.time_base.steps_per_row == 1
+    result = analysis.compare(model, meas)
+    assert result.inputs.cutoffs["base_speed"] is None
     assert result.nrmse < 1e-3, result.nrmse
 
     from gearsim.cli import main

@@ -26,7 +26,17 @@ missing or unreadable file, not a text CSV, no header, no data rows, a required
 column missing, a cell that is not a number, NaN or infinity, time not strictly
 increasing, sampling that is not uniform (a sample more than half a step away
 from the uniform grid; pass ``resample=True`` to interpolate onto a uniform grid
-instead), fewer than 20 samples. Extra columns are ignored and never parsed.
+instead), fewer than 20 samples. Extra columns are ignored and never parsed,
+except those a rig-time CSV of ``gearsim hil to-csv`` needs (below).
+
+A first line ``# gearsim hil to-csv: time_base=rig rig_dt=H held=COLUMNS``
+(what ``gearsim hil to-csv`` writes for a log in rig time) is kept as
+:attr:`Measurement.time_base`, with its ``inputs_since`` and
+``<input>_before`` columns in :attr:`Measurement.data`, so that the
+simulation steps the model as the rig was stepped (:mod:`.simulate`); a bad
+value in that line, a row step that is not a whole number of rig steps, or a
+missing column is an error naming the line. ``time_base=wall`` is warned
+about: such a CSV cannot reproduce the run step for step.
 User text echoed in a message goes through :func:`gearsim._outputs.printable`.
 
 Column mapping: ``columns={"pinion_speed": "omega_rad_s"}`` reads a canonical
@@ -49,6 +59,7 @@ import csv
 import gzip
 import io
 import lzma
+import math
 import os
 import re
 import sys
@@ -60,7 +71,14 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .._outputs import atomic_writer, printable
-from ..columns import OPTIONAL, RIGS, RigColumns
+from ..columns import (
+    BEFORE_SUFFIX,
+    INPUTS_SINCE,
+    OPTIONAL,
+    RIG_TIME_MARKER,
+    RIGS,
+    RigColumns,
+)
 from ..errors import caller_stacklevel
 from .errors import MeasurementError
 from .signals import describe_gap, sampling_gaps
@@ -73,6 +91,10 @@ MAX_MAGNITUDE = 1e12
 __all__ = [
     "RigSpec",
     "RIG_SPECS",
+    "RecordedTimeBase",
+    "MARKER",
+    "INPUTS_SINCE",
+    "BEFORE_SUFFIX",
     "OPTIONAL_INPUTS",
     "Measurement",
     "MeasurementWarning",
@@ -83,6 +105,10 @@ __all__ = [
 
 MIN_SAMPLES = 20
 STDIN = "-"
+
+MARKER = RIG_TIME_MARKER
+#: How far (relative) the row step may be from a whole number of rig steps.
+_SUBSTEP_TOLERANCE = 1e-6
 
 
 class MeasurementWarning(UserWarning):
@@ -151,6 +177,27 @@ class RigSpec:
 
 RIG_SPECS: dict[str, RigSpec] = {block: RigSpec.from_columns(rig) for block, rig in RIGS.items()}
 
+
+@dataclass(frozen=True)
+class RecordedTimeBase:
+    """What the first line of a ``gearsim hil to-csv`` CSV says about its rows.
+
+    kind: "rig" (the rows are the instants at which a rig stepped every
+    ``rig_dt`` seconds sent its outputs; the ``held`` input columns were held
+    constant over each rig step, changing at the row's ``inputs_since``) or
+    "wall" (resampled from a wall-clock log). steps_per_row: rig steps per row
+    interval (the row step divided by rig_dt; 0 for "wall")."""
+
+    kind: str
+    rig_dt: float | None = None
+    held: tuple[str, ...] = ()
+    steps_per_row: int = 0
+
+    @property
+    def is_rig(self) -> bool:
+        return self.kind == "rig"
+
+
 OPTIONAL_INPUTS: tuple[str, ...] = tuple(col.name for col in OPTIONAL)
 
 
@@ -168,6 +215,8 @@ class Measurement:
     data: Mapping[str, np.ndarray]
     path: str = "<memory>"
     notes: tuple[str, ...] = field(default=())
+    time_base: RecordedTimeBase | None = None
+    """the to-csv first line's facts (None: a file without it)"""
 
     @property
     def n(self) -> int:
@@ -189,13 +238,17 @@ class Measurement:
         return self.data[name]
 
     def slice(self, start: int, stop: int, step: int = 1) -> Measurement:
-        """Sub-measurement of samples [start:stop:step] (dt scales with step)."""
+        """Sub-measurement of samples [start:stop:step] (dt scales with step).
+
+        Keeping every step-th row of a rig-time CSV loses what the rig applied
+        between the kept rows: such a slice forgets its time base."""
         sl = slice(start, stop, step)
         return replace(
             self,
             time=self.time[sl],
             dt=self.dt * step,
             data={k: v[sl] for k, v in self.data.items()},
+            time_base=self.time_base if step == 1 else None,
         )
 
     def with_data(self, **columns: np.ndarray) -> Measurement:
@@ -587,6 +640,8 @@ def _find_header(data: bytes, shown: str, inside: str) -> _Header:
         if m and sep_hint is None and not comments:
             sep_hint = m.group(1)
             continue
+        if s.startswith(MARKER):
+            continue  # facts about the rows (see _read_marker), never a header
         if s.startswith("#"):
             comments.append((lineno, s, nxt))
             continue
@@ -650,6 +705,11 @@ class _Column:
     offset: float = 0.0
     unit: str | None = None  # the unit found in the header
     explicit_factor: bool = False
+    unit_of: str | None = None  # the canonical column whose SI unit this one has
+
+    @property
+    def si_column(self) -> str:
+        return self.unit_of or self.canonical
 
     @property
     def shown(self) -> str:
@@ -787,7 +847,7 @@ def _unit_conversion(col: _Column, spec: RigSpec, shown: str, line: int) -> tupl
     canonical column; raises naming the column, the unit and the way out."""
     from ..units import registry
 
-    target = spec.unit(col.canonical)
+    target = spec.unit(col.si_column)
     unit = col.unit or ""
     shown_unit = printable(unit, 30)
     way_out = (
@@ -888,6 +948,7 @@ def load_measurement(
     data, kinds = _decompress(_read_source(path_s, shown), path_s, shown, notes)
     inside = f" (after {' and '.join(kinds)} decompression)" if kinds else ""
     data = _check_text(data, shown, kinds)
+    marker = _read_marker(data, spec, shown)
     hdr = _find_header(data, shown, inside)
     sample = _sample_lines(data, hdr.body_start, hdr.body_line)
     sep = hdr.sep or _sniff_separator(hdr.text, sample)
@@ -908,6 +969,8 @@ def load_measurement(
         )
         if col is not None:
             wanted.append(col)
+    if marker is not None and marker.time_base.is_rig:
+        wanted += _rig_time_columns(marker, fields, spec, shown, hdr.line, how)
     dec = _sniff_decimal(sample, sep, [c.index for c in wanted])
     if dec == ",":
         how += " and decimal comma" if how else " with decimal comma"
@@ -928,7 +991,7 @@ def load_measurement(
             continue
         col.factor, col.offset = _unit_conversion(col, spec, shown, hdr.line)
         if col.factor != 1.0 or col.offset != 0.0:
-            target = spec.unit(col.canonical)
+            target = spec.unit(col.si_column)
             converted.append(f"'{col.shown}' {printable(col.unit, 30)} -> {target}")
     if converted:
         notes.info("converted to SI: " + ", ".join(converted))
@@ -980,7 +1043,154 @@ def load_measurement(
     )
     for n in meas.notes:
         notes.info(n)
-    return replace(meas, notes=tuple(notes.items))
+    time_base = None
+    if marker is not None:
+        time_base = _check_time_base(meas, marker, notes, shown, line_of)
+    return replace(meas, notes=tuple(notes.items), time_base=time_base)
+
+
+# ------------------------------------------------------------------ the to-csv first line
+
+
+@dataclass(frozen=True)
+class _Marker:
+    line: int  # 1-based line of the marker
+    time_base: RecordedTimeBase
+
+
+def _read_marker(data: bytes, spec: RigSpec, shown: str) -> _Marker | None:
+    """The facts of a leading ``# gearsim hil to-csv: key=value ...`` line
+    (docs/measurement-format.md section 1.7), or None when the first line is
+    anything else. Unknown keys are ignored (a newer to-csv may add some)."""
+    for lineno, _start, raw, _next in _iter_lines(data):
+        text = _decode(raw).strip().lstrip("\ufeff")
+        if not text:
+            continue
+        if not text.startswith(MARKER):
+            return None
+        facts: dict[str, str] = {}
+        for item in text[len(MARKER) :].split():
+            key, sep, value = item.partition("=")
+            if not sep or not key:
+                raise MeasurementError(
+                    f"'{printable(item, 40)}' in the gearsim hil to-csv line is not KEY=VALUE",
+                    file=shown,
+                    line=lineno,
+                )
+            facts[key] = value
+        return _Marker(lineno, _time_base_of(facts, spec, shown, lineno))
+    return None
+
+
+def _time_base_of(facts: dict[str, str], spec: RigSpec, shown: str, line: int) -> RecordedTimeBase:
+    def bad(key: str, why: str) -> MeasurementError:
+        value = printable(facts.get(key, ""), 40)
+        return MeasurementError(
+            f"{key}={value} in the gearsim hil to-csv line {why}", file=shown, line=line
+        )
+
+    kind = facts.get("time_base")
+    if kind == "wall":
+        return RecordedTimeBase("wall")
+    if kind != "rig":
+        raise bad("time_base", "is not 'rig' or 'wall'")
+    try:
+        rig_dt = float(facts.get("rig_dt", ""))
+    except ValueError:
+        rig_dt = math.nan
+    if not (math.isfinite(rig_dt) and rig_dt > 0.0):
+        raise bad("rig_dt", "is not a positive number of seconds (the rig step)")
+    held: list[str] = []
+    for name in filter(None, (h.strip() for h in facts.get("held", "").split(","))):
+        if name not in spec.inputs:
+            raise bad(
+                "held",
+                f"names '{printable(name, 40)}', which is not an input column of the "
+                f"{spec.block} rig ({', '.join(spec.inputs)})",
+            )
+        if name not in held:
+            held.append(name)
+    return RecordedTimeBase("rig", rig_dt, tuple(held))
+
+
+def _rig_time_columns(
+    marker: _Marker, fields: list[str], spec: RigSpec, shown: str, line: int, how: str
+) -> list[_Column]:
+    """The ``inputs_since`` and ``<input>_before`` columns a rig-time CSV must have."""
+    needed = {INPUTS_SINCE: "time"}
+    needed.update({name + BEFORE_SUFFIX: name for name in marker.time_base.held})
+    found: list[_Column] = []
+    for name, unit_of in needed.items():
+        col = _resolve(
+            name, None, fields, block=spec.block, spec=spec, shown=shown, line=line, how=how
+        )
+        if col is None:
+            raise MeasurementError(
+                f"missing column: the first line (line {marker.line}) says time_base=rig, "
+                f"which needs the columns {', '.join(needed)} (as gearsim hil to-csv writes them)",
+                file=shown,
+                line=line,
+                column=name,
+            )
+        col.unit_of = unit_of
+        found.append(col)
+    return found
+
+
+def _check_time_base(
+    meas: Measurement, marker: _Marker, notes: _Notes, shown: str, line_of: Callable[[int], int]
+) -> RecordedTimeBase | None:
+    """The time base to keep on the measurement, once its rows are checked
+    against it: a warning for a wall-clock CSV, the rig steps per row for a
+    rig-time one."""
+    base = marker.time_base
+    if not base.is_rig:
+        notes.warn(
+            "the first line says time_base=wall: this CSV was resampled from a wall-clock "
+            "log and cannot reproduce the run step for step; record with 'gearsim hil run "
+            "--log' (rig time) instead"
+        )
+        return base
+    if any(n.startswith("resampled") for n in meas.notes):
+        notes.warn(
+            "the rig-time rows were resampled: the model is stepped once per row, not per "
+            "rig step as the first line says"
+        )
+        return None
+    ratio = meas.dt / base.rig_dt
+    steps = round(ratio)
+    if steps < 1 or abs(ratio - steps) > _SUBSTEP_TOLERANCE * steps:
+        raise MeasurementError(
+            f"rig_dt={base.rig_dt!r} in the gearsim hil to-csv line does not divide the row "
+            f"step {meas.dt:.9g} s into whole rig steps (ratio {ratio:.9g})",
+            file=shown,
+            line=marker.line,
+        )
+    _check_inputs_since(meas, base.rig_dt, shown, line_of)
+    notes.info(
+        f"rig time (line {marker.line}): the model is stepped every {base.rig_dt:g} s, "
+        f"{steps} steps per row"
+        + (f", with {', '.join(base.held)} held as the rig applied them" if base.held else "")
+    )
+    return replace(base, steps_per_row=steps)
+
+
+def _check_inputs_since(
+    meas: Measurement, rig_dt: float, shown: str, line_of: Callable[[int], int]
+) -> None:
+    """Each row's inputs_since lies in the interval that ends at the row (half
+    a rig step of slack for the rounding of the text)."""
+    since = meas[INPUTS_SINCE]
+    outside = (since < meas.time - meas.dt - 0.5 * rig_dt) | (since > meas.time + 0.5 * rig_dt)
+    if outside.any():
+        r = int(np.nonzero(outside)[0][0])
+        raise MeasurementError(
+            f"inputs_since {float(since[r])!r} s is outside the row's interval "
+            f"({float(meas.time[r] - meas.dt)!r} s to {float(meas.time[r])!r} s)",
+            file=shown,
+            line=line_of(r),
+            column=INPUTS_SINCE,
+        )
 
 
 def _hz(f: float) -> str:

@@ -17,6 +17,15 @@ log) is fed as it is: its steps are what the rig saw. A model with backlash
 gets the measured speed through a wider filter
 (:func:`gearsim.analysis.signals.contact_cutoff`): its contact integrates the
 speed instead of differentiating it, so the impacts keep their fast content.
+
+Rig time (a CSV of ``gearsim hil to-csv`` whose first line says
+``time_base=rig``, :attr:`Measurement.time_base`): the model is stepped as the
+rig was, every ``rig_dt`` seconds, ``steps_per_row`` steps per row, and
+compared with the outputs after the last step of each row's interval. The
+held inputs are fed as the rig applied them (:func:`expand_to_rig_steps`) and
+never filtered, whatever ``input_filter`` says: they are exact, a filter
+would only make them something the rig did not see. :func:`row_samples`
+picks the rows' values out of the rig steps.
 """
 
 from __future__ import annotations
@@ -29,10 +38,83 @@ import numpy as np
 
 from ..columns import AMBIENT_TEMPERATURE, TEMPERATURE
 from . import modelkit as mk
-from .measurement import Measurement
+from .measurement import BEFORE_SUFFIX, INPUTS_SINCE, Measurement
 from .signals import auto_cutoff, contact_cutoff, is_held, zero_phase_lowpass
 
-__all__ = ["Inputs", "prepare_inputs", "Simulation", "simulate", "simulate_outputs"]
+__all__ = [
+    "Inputs",
+    "RigSteps",
+    "prepare_inputs",
+    "rig_steps_of",
+    "expand_to_rig_steps",
+    "row_samples",
+    "Simulation",
+    "simulate",
+    "simulate_outputs",
+]
+
+
+@dataclass(frozen=True)
+class RigSteps:
+    """How the rig was stepped over the rows of a rig-time CSV.
+
+    rig_dt: the rig step (s); steps_per_row: rig steps in each row's
+    interval; steps_before: per row, how many of those steps (the first
+    ones) applied the held inputs' earlier values; before: held input column
+    -> its value before the row's ``inputs_since``, per row."""
+
+    rig_dt: float
+    steps_per_row: int
+    steps_before: np.ndarray
+    before: Mapping[str, np.ndarray]
+
+    def slice(self, start: int, stop: int) -> RigSteps:
+        return RigSteps(
+            self.rig_dt,
+            self.steps_per_row,
+            self.steps_before[start:stop],
+            {name: x[start:stop] for name, x in self.before.items()},
+        )
+
+
+def rig_steps_of(meas: Measurement) -> RigSteps | None:
+    """The rig stepping a rig-time measurement records (None for any other).
+
+    In the interval that ends at row j (time t_j), rig step k = 0..n-1 starts
+    at t_j - (n - k)*h; it applied the held inputs' ``_before`` values when it
+    started before inputs_since[j] (half a step of slack for the rounding of
+    the times in the text), the row's own inputs otherwise. Solved for k:
+    the first ceil(n - (t_j - inputs_since[j])/h - 1/2) steps, within 0..n."""
+    base = meas.time_base
+    if base is None or not base.is_rig:
+        return None
+    h, n = float(base.rig_dt), base.steps_per_row
+    since = meas[INPUTS_SINCE]
+    first_after = np.ceil(n - (meas.time - since) / h - 0.5)
+    steps_before = np.clip(first_after, 0, n).astype(np.int64)
+    before = {name: meas[name + BEFORE_SUFFIX] for name in base.held}
+    return RigSteps(h, n, steps_before, before)
+
+
+def expand_to_rig_steps(
+    values: np.ndarray, steps: RigSteps, before: np.ndarray | None = None
+) -> np.ndarray:
+    """One value per rig step from one value per row: the row's value for
+    each of its steps_per_row steps, except the first steps_before[j] steps
+    of row j, which get before[j] (when `before` is given: a held input)."""
+    n = steps.steps_per_row
+    fine = np.repeat(np.asarray(values, dtype=float), n)
+    if before is not None:
+        earlier = np.arange(n)[None, :] < steps.steps_before[:, None]
+        fine[earlier.ravel()] = np.repeat(np.asarray(before, dtype=float), n)[earlier.ravel()]
+    return fine
+
+
+def row_samples(fine: np.ndarray, steps: RigSteps) -> np.ndarray:
+    """The value after the last rig step of each row's interval (the rig
+    sent its outputs then)."""
+    n = steps.steps_per_row
+    return np.asarray(fine, dtype=float)[n - 1 :: n]
 
 
 @dataclass(frozen=True)
@@ -42,7 +124,9 @@ class Inputs:
     cutoffs: input column -> cut-off (Hz) applied, or None when unfiltered;
     plus "<speed column> (backlash contact)" when contact_speed is set.
     contact_speed: the base speed for a model with backlash, when its
-    conditioning differs from base_speed's (None: the same)."""
+    conditioning differs from base_speed's (None: the same).
+    rig_steps: how the rig was stepped over the rows (a rig-time CSV), or
+    None: the model is stepped once per row, at dt."""
 
     base_speed: np.ndarray
     load: np.ndarray
@@ -51,6 +135,7 @@ class Inputs:
     dt: float
     cutoffs: Mapping[str, float | None] = field(default_factory=dict)
     contact_speed: np.ndarray | None = None
+    rig_steps: RigSteps | None = None
 
     def speed_for(self, model: Any) -> np.ndarray:
         """The base speed that drives `model`'s rig: contact_speed for a
@@ -71,6 +156,7 @@ class Inputs:
             self.dt,
             self.cutoffs,
             s(self.contact_speed),
+            None if self.rig_steps is None else self.rig_steps.slice(start, stop),
         )
 
 
@@ -78,13 +164,16 @@ def prepare_inputs(meas: Measurement, input_filter: float | str | None = "auto")
     """Rig inputs of a measurement, conditioned by the zero-phase input filter.
 
     input_filter: "auto" (cut-off per input from its spectrum; held inputs
-    unfiltered), a cut-off in Hz for every input, or None (raw samples)."""
+    unfiltered), a cut-off in Hz for every input, or None (raw samples). The
+    held inputs of a rig-time CSV are never filtered (module docstring)."""
     fs = 1.0 / meas.dt
     cutoffs: dict[str, float | None] = {}
+    steps = rig_steps_of(meas)
+    held_as_applied = set(steps.before) if steps is not None else set()
 
     def cond(name: str) -> np.ndarray:
         x = meas[name]
-        if input_filter is None or input_filter == "none":
+        if input_filter is None or input_filter == "none" or name in held_as_applied:
             cutoffs[name] = None
             return x
         if input_filter == "auto" and is_held(x):
@@ -108,7 +197,7 @@ def prepare_inputs(meas: Measurement, input_filter: float | str | None = "auto")
     load = cond(spec.load_input)
     temp = cond(TEMPERATURE.name) if meas.has_temperature else None
     amb = cond(AMBIENT_TEMPERATURE.name) if meas.has_ambient else None
-    return Inputs(speed, load, temp, amb, meas.dt, cutoffs, contact)
+    return Inputs(speed, load, temp, amb, meas.dt, cutoffs, contact, steps)
 
 
 @dataclass
@@ -140,9 +229,11 @@ _SIGNALS = (
 
 def _run(model: Any, meas: Measurement, inputs: Inputs) -> tuple[Any, dict[str, np.ndarray]]:
     """One batch run of the model's rig on the inputs: the RigResult, and the
-    two simulated outputs under their canonical names."""
+    two simulated outputs under their canonical names (one value per row)."""
     use_temperature = inputs.measured_temperature is not None
-    rig = model.rig(dt=inputs.dt, temperature_input=use_temperature)
+    steps = inputs.rig_steps
+    dt = inputs.dt if steps is None else steps.rig_dt
+    rig = model.rig(dt=dt, temperature_input=use_temperature)
     # which rig input each column drives and which rig output each measured
     # output is compared with: gearsim.columns, shared with the HIL recording
     cols = meas.spec.columns
@@ -152,11 +243,21 @@ def _run(model: Any, meas: Measurement, inputs: Inputs) -> tuple[Any, dict[str, 
         AMBIENT_TEMPERATURE: inputs.ambient_temperature,
         TEMPERATURE: inputs.measured_temperature,
     }
-    kw: dict[str, Any] = {str(col.rig_input): x for col, x in given.items() if x is not None}
+    kw: dict[str, Any] = {}
+    for col, x in given.items():
+        if x is None:
+            continue
+        if steps is not None:
+            x = expand_to_rig_steps(x, steps, steps.before.get(col.name))
+        kw[str(col.rig_input)] = x
     res = rig.run(**kw)
-    return res, {
-        col.name: np.asarray(getattr(res, str(col.rig_output)), dtype=float) for col in cols.outputs
-    }
+    return res, {col.name: _per_row(res, str(col.rig_output), steps) for col in cols.outputs}
+
+
+def _per_row(res: Any, name: str, steps: RigSteps | None) -> np.ndarray:
+    """RigResult signal `name`, one value per row of the measurement."""
+    values = np.asarray(getattr(res, name), dtype=float)
+    return values if steps is None else row_samples(values, steps)
 
 
 def simulate(
@@ -168,9 +269,8 @@ def simulate(
     res, outputs = _run(model, meas, inputs)
     sig = {}
     for name in signals:
-        val = getattr(res, name, None)
-        if val is not None:
-            sig[name] = np.asarray(val, dtype=float)
+        if getattr(res, name, None) is not None:
+            sig[name] = _per_row(res, name, inputs.rig_steps)
     return Simulation(outputs, sig)
 
 

@@ -61,7 +61,7 @@ import can
 import numpy as np
 
 from .._outputs import atomic_writer, printable
-from ..columns import RIGS, TEMPERATURE, Column
+from ..columns import BEFORE_SUFFIX, INPUTS_SINCE, RIG_TIME_MARKER, RIGS, TEMPERATURE, Column
 from ..errors import InputError
 from .codec import Rejection, RigDbc
 from .replay import DEFAULT_MAX_GAP, TimeCheck, read_log
@@ -103,12 +103,7 @@ class RecordingError(InputError):
     status 2."""
 
 
-#: Name of the column that says from when each row's inputs were applied (rig time base).
-INPUTS_SINCE = "inputs_since"
-#: Suffix of the columns holding each held input's value before ``inputs_since``.
-BEFORE_SUFFIX = "_before"
-#: Start of the first line of the CSV, which says how the rows were made.
-MARKER = "# gearsim hil to-csv:"
+MARKER = RIG_TIME_MARKER
 #: Frame times this close (s) to the period grid count as on it: the rounding
 #: of log formats (microseconds in text logs) and of epoch timestamps in doubles.
 _GRID_SLACK = 2e-6
