@@ -569,8 +569,10 @@ static void rigid_torque_driven(const rig_consts_ *r, gs_rig_state *st, const gs
     const gs_real a = m->inv_ratio;
     const gs_real push = in->load + r->load_offset;
     gs_real drive = in->base_torque;
-    if (r->ripple) { /* at the mid angle the start speed predicts */
-        drive -= ripple_torque(r, st->base_angle + GS_R(0.5) * h * st->base_speed);
+    if (r->ripple) {
+        /* at the start angle: with the angle advanced by the end speed this is
+         * symplectic Euler, so the ripple's potential energy does not drift */
+        drive -= ripple_torque(r, st->base_angle);
     }
     const geared_base_end e = geared_base_step(r, ctx, h, st->base_speed, st->block.follower_torque, drive,
                                                GS_R(0.0), push);
@@ -621,6 +623,8 @@ static void compliant_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss
             w_d_start + (in->base_speed - w_d_start) * (((gs_real)k + GS_R(0.5)) * r->inv_compliance_substeps);
         gs_real drive = r->stiffness * phi + g * (w_d - GS_R(0.5) * w);
         if (r->ripple) {
+            /* at the mid angle the start speed predicts: with the angle
+             * advanced by the mean speed the map stays area-preserving */
             drive -= ripple_torque(r, st->base_angle + GS_R(0.5) * h * w);
         }
         const geared_base_end e = geared_base_step(r, ctx, h, w, st->block.follower_torque, drive, GS_R(0.5) * g, push);
@@ -798,10 +802,10 @@ static void backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
             speed_driven ? w_b_start + (in->base_speed - w_b_start) * ((gs_real)(k + 1) * r->inv_substeps)
                          : (r->base_inertia * st->base_speed + h * in->base_torque) * r->inv_base_inertia_sub;
         if (r->ripple) {
-            /* at the sub-step's mid angle: exact for the held speed, predicted
-             * from the start speed for a torque-driven base */
-            const gs_real w_mid = speed_driven ? w_b_free : st->base_speed;
-            const gs_real tau_ripple = ripple_torque(r, st->base_angle + GS_R(0.5) * h * w_mid);
+            /* a held speed: at the sub-step's mid angle; a torque-driven base:
+             * at the start angle (symplectic Euler, as in the rigid rig) */
+            const gs_real tau_ripple =
+                ripple_torque(r, speed_driven ? st->base_angle + GS_R(0.5) * h * w_b_free : st->base_angle);
             sum_ripple += tau_ripple;
             if (!speed_driven) {
                 w_b_free -= h * tau_ripple * r->inv_base_inertia_sub;
