@@ -22,6 +22,14 @@ static inline gs_real gs_abs(gs_real x)
     return x < GS_R(0.0) ? -x : x;
 #endif
 }
+/* Keeps a single copy of a larger helper where GCC and Clang would inline
+ * every call (flash on a microcontroller). */
+#if defined(__GNUC__)
+#define GS_NOINLINE __attribute__((noinline))
+#else
+#define GS_NOINLINE
+#endif
+
 static inline gs_real gs_min(gs_real a, gs_real b) { return a < b ? a : b; }
 static inline gs_real gs_max(gs_real a, gs_real b) { return a > b ? a : b; }
 static inline gs_real gs_clamp(gs_real x, gs_real lo, gs_real hi) { return gs_min(gs_max(x, lo), hi); }
@@ -98,7 +106,8 @@ static inline gs_real gs_reduce_angle(gs_real x)
 
 /* cos and sin of an angle already in [-pi, pi] (gs_reduce_angle), without
  * libm: a quarter turn q is taken out so that |t| <= pi/4, where Taylor
- * polynomials to t^16 and t^15 are exact to about one rounding. */
+ * polynomials to t^16 and t^15 (float: t^10 and t^11) are exact to about one
+ * rounding. */
 static inline void gs_cos_sin(gs_real angle, gs_real *c, gs_real *s)
 {
 #ifdef GS_SINGLE_PRECISION
@@ -112,6 +121,16 @@ static inline void gs_cos_sin(gs_real angle, gs_real *c, gs_real *s)
     const int q = (int)(quarters + (quarters >= GS_R(0.0) ? GS_R(0.5) : GS_R(-0.5)));
     const gs_real t = (angle - (gs_real)q * half_pi_hi) - (gs_real)q * half_pi_lo;
     const gs_real t2 = t * t;
+#ifdef GS_SINGLE_PRECISION
+    /* to t^10 and t^11: the next terms are below 1.2e-10 */
+    const gs_real cos_t =
+        GS_R(1.0) - t2 * (GS_R(0.5) - t2 * (GS_R(1.0) / GS_R(24.0) - t2 * (GS_R(1.0) / GS_R(720.0)
+        - t2 * (GS_R(1.0) / GS_R(40320.0) - t2 * (GS_R(1.0) / GS_R(3628800.0))))));
+    const gs_real sin_t =
+        t * (GS_R(1.0) - t2 * (GS_R(1.0) / GS_R(6.0) - t2 * (GS_R(1.0) / GS_R(120.0)
+        - t2 * (GS_R(1.0) / GS_R(5040.0) - t2 * (GS_R(1.0) / GS_R(362880.0)
+        - t2 * (GS_R(1.0) / GS_R(39916800.0)))))));
+#else
     const gs_real cos_t =
         GS_R(1.0) - t2 * (GS_R(0.5) - t2 * (GS_R(1.0) / GS_R(24.0) - t2 * (GS_R(1.0) / GS_R(720.0)
         - t2 * (GS_R(1.0) / GS_R(40320.0) - t2 * (GS_R(1.0) / GS_R(3628800.0)
@@ -122,6 +141,7 @@ static inline void gs_cos_sin(gs_real angle, gs_real *c, gs_real *s)
         - t2 * (GS_R(1.0) / GS_R(5040.0) - t2 * (GS_R(1.0) / GS_R(362880.0)
         - t2 * (GS_R(1.0) / GS_R(39916800.0) - t2 * (GS_R(1.0) / GS_R(6227020800.0)
         - t2 * (GS_R(1.0) / GS_R(1307674368000.0)))))))));
+#endif
     switch ((q + 4) % 4) {  /* q in [-2, 2] for |angle| <= pi */
     case 0: *c = cos_t; *s = sin_t; break;
     case 1: *c = -sin_t; *s = cos_t; break;

@@ -304,23 +304,31 @@ static void compliance_fill(rig_consts_ *r, const gs_rig_params *p)
     r->compliance_gain = GS_R(0.5) * r->stiffness * r->compliance_h + r->shaft_damping;
 }
 
+/* cos and sin of any angle: one copy of the polynomials for init and step. */
+static GS_NOINLINE void cos_sin(gs_real angle, gs_real *c, gs_real *s)
+{
+    gs_cos_sin(gs_reduce_angle(angle), c, s);
+}
+
 /* a = A*cos(phi), b = A*sin(phi) of each harmonic. */
 static void ripple_fill(rig_consts_ *r, const gs_rig_params *p)
 {
+    int mesh_harmonics = 0;
     r->ripple = 0;
     r->mesh_teeth = p->ripple_mesh_teeth;
     for (int i = 0; i < GS_RIPPLE_HARMONICS; ++i) {
         gs_real c;
         gs_real s;
-        gs_cos_sin(gs_reduce_angle(p->ripple_revolution_phase_rad[i]), &c, &s);
+        cos_sin(p->ripple_revolution_phase_rad[i], &c, &s);
         r->ripple_rev_cos[i] = p->ripple_revolution_amplitude_Nm[i] * c;
         r->ripple_rev_sin[i] = p->ripple_revolution_amplitude_Nm[i] * s;
-        gs_cos_sin(gs_reduce_angle(p->ripple_mesh_phase_rad[i]), &c, &s);
+        cos_sin(p->ripple_mesh_phase_rad[i], &c, &s);
         r->ripple_mesh_cos[i] = p->ripple_mesh_amplitude_Nm[i] * c;
         r->ripple_mesh_sin[i] = p->ripple_mesh_amplitude_Nm[i] * s;
         r->ripple |= p->ripple_revolution_amplitude_Nm[i] > GS_R(0.0) || p->ripple_mesh_amplitude_Nm[i] > GS_R(0.0);
+        mesh_harmonics |= p->ripple_mesh_amplitude_Nm[i] > GS_R(0.0);
     }
-    if (p->ripple_mesh_teeth == 0) {
+    if (!mesh_harmonics) { /* the step skips the tooth-mesh angle */
         r->mesh_teeth = 0;
     }
 }
@@ -429,13 +437,15 @@ void gs_rig_reset(const gs_rig_consts *consts, gs_rig_state *st)
  * the speed a (sub-)step starts from: explicit, like any speed-dependent
  * friction level here; the friction's direction stays implicit. Past
  * (w_f/v_S)^2 = 40 the hump is below 5e-18 of itself and is dropped. */
-static inline gs_real friction_level(const rig_consts_ *r, gs_real w_f)
+static GS_NOINLINE gs_real stribeck_level(const rig_consts_ *r, gs_real w_f)
 {
-    if (!r->stribeck) {
-        return r->load_coulomb;
-    }
     const gs_real z = w_f * w_f * r->inv_stribeck_speed_sq;
     return z < GS_R(40.0) ? r->load_coulomb + r->stribeck_excess * gs_exp_neg(z) : r->load_coulomb;
+}
+
+static inline gs_real friction_level(const rig_consts_ *r, gs_real w_f)
+{
+    return r->stribeck ? stribeck_level(r, w_f) : r->load_coulomb;
 }
 
 /* The ripple torque the base shaft must add at base angle theta (N*m):
@@ -446,7 +456,7 @@ static gs_real harmonics(const gs_real *a, const gs_real *b, gs_real angle)
 {
     gs_real c1;
     gs_real s1;
-    gs_cos_sin(angle, &c1, &s1);
+    cos_sin(angle, &c1, &s1);
     gs_real c_prev = GS_R(1.0), s_prev = GS_R(0.0), c = c1, sn = s1;
     gs_real sum = GS_R(0.0);
     for (int i = 0; i < GS_RIPPLE_HARMONICS; ++i) {
@@ -463,12 +473,12 @@ static gs_real harmonics(const gs_real *a, const gs_real *b, gs_real angle)
 
 static gs_real ripple_torque(const rig_consts_ *r, gs_real theta)
 {
-    /* Z*theta is reduced from the reduced theta: Z is an integer, so the
+    /* Z*theta is formed from the reduced theta: Z is an integer, so the
      * phase survives where Z*theta itself would have lost it */
     const gs_real reduced = gs_reduce_angle(theta);
     gs_real tau = harmonics(r->ripple_rev_cos, r->ripple_rev_sin, reduced);
     if (r->mesh_teeth > 0) {
-        tau += harmonics(r->ripple_mesh_cos, r->ripple_mesh_sin, gs_reduce_angle((gs_real)r->mesh_teeth * reduced));
+        tau += harmonics(r->ripple_mesh_cos, r->ripple_mesh_sin, (gs_real)r->mesh_teeth * reduced);
     }
     return tau;
 }
