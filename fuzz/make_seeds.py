@@ -28,7 +28,10 @@ RACK = {"parameterization": 0, "pinion_radius": 1, "teeth_count": 2, "spacing": 
         "backlash.enabled": 16, "backlash.hard_stop_model": 17, "backlash.stiffness": 21,
         "backlash.lock_enabled": 25}
 RIG = {"dt": 0, "base_drive": 1, "base_inertia": 2, "driven_inertia": 4, "load_coulomb_friction": 5,
-       "heat_path": 8, "temperature_source": 10, "accel_filter": 11, "contact_substeps": 12}
+       "heat_path": 8, "temperature_source": 10, "accel_filter": 11, "contact_substeps": 12,
+       "load_breakaway_friction": 13, "load_stribeck_speed": 14, "compliance_stiffness": 15,
+       "compliance_damping": 16, "ripple_revolution_amplitude": 17, "ripple_revolution_phase": 18,
+       "ripple_mesh_amplitude": 19, "ripple_mesh_phase": 20, "ripple_mesh_teeth": 21}
 
 
 def rec_int(dest, field, value):
@@ -114,6 +117,22 @@ def main():
     init.append(init_seed(2, [rec_interesting(r, RIG["dt"], 0)], flags=4))             # dt 0, err NULL
     init.append(init_seed(3, [], flags=0x18))                                          # NULL model
     init.append(init_seed(2, [], flags=0x38))                                          # NULL block params
+    # the rig terms of physics.md 11: Stribeck, compliance, ripple; then their failing rules
+    stribeck = [rec_pow10(r, RIG["load_coulomb_friction"], -8), rec_pow10(r, RIG["load_breakaway_friction"], 0),
+                rec_pow10(r, RIG["load_stribeck_speed"], -16)]
+    ripple = [rec_frac(r, RIG["ripple_revolution_amplitude"], 0.25), rec_frac(r, RIG["ripple_revolution_phase"], 1.5),
+              rec_frac(r, RIG["ripple_mesh_amplitude"], 0.05, elem=1), rec_int(r, RIG["ripple_mesh_teeth"], 19)]
+    shaft = [rec_pow10(r, RIG["base_inertia"], -16), rec_pow10(r, RIG["compliance_stiffness"], 24),
+             rec_pow10(r, RIG["compliance_damping"], -8)]
+    init.append(init_seed(2, stribeck + ripple, steps=steps))
+    init.append(init_seed(3, stribeck + [rec_int(r, RIG["base_drive"], 1), rec_pow10(r, RIG["base_inertia"], -32)],
+                          steps=steps))
+    init.append(init_seed(2, shaft + ripple, steps=steps))
+    init.append(init_seed(3, shaft + stribeck, steps=steps))
+    init.append(init_seed(2, [rec_pow10(r, RIG["load_coulomb_friction"], 8),
+                              rec_pow10(r, RIG["load_breakaway_friction"], 0)]))     # breakaway below Coulomb
+    init.append(init_seed(2, shaft + [rec_int(r, RIG["base_drive"], 1)]))            # compliance, torque-driven
+    init.append(init_seed(3, [rec_frac(r, RIG["ripple_mesh_amplitude"], 0.1)]))       # mesh ripple, no teeth
     write("fuzz_init", init)
 
     rig = []
@@ -123,6 +142,17 @@ def main():
         c2 = rnd.randrange(256)
         c3 = rnd.randrange(256)
         params = bytes(rnd.randrange(256) for _ in range(120))
+        inputs = bytes(rnd.randrange(256) for _ in range(10 * 24))
+        rig.append(bytes([c0, c1, c2, c3]) + params + inputs)
+    # bit 6: Stribeck friction and ripple; bit 7: compliant shaft (speed-driven rigid rigs)
+    for i in range(8):
+        c0 = (i & 1) | (((i >> 1) & 1) << 1 if i >= 6 else 0) | (((i >> 2) & 1) << 2 if i < 4 else 0)
+        c0 |= 0x40 if i % 3 != 2 else 0
+        c0 |= 0x80 if i % 3 != 0 else 0
+        c1 = i % 5 | rnd.randrange(32) << 3
+        c2 = rnd.randrange(256)
+        c3 = rnd.randrange(256)
+        params = bytes(rnd.randrange(256) for _ in range(140))
         inputs = bytes(rnd.randrange(256) for _ in range(10 * 24))
         rig.append(bytes([c0, c1, c2, c3]) + params + inputs)
     write("fuzz_rig", rig)

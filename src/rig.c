@@ -436,7 +436,7 @@ void gs_rig_reset(const gs_rig_consts *consts, gs_rig_state *st)
  * hump (F_brk - F_C)*exp(-(w_f/v_S)^2), which is F_brk at rest. Evaluated at
  * the speed a (sub-)step starts from: explicit, like any speed-dependent
  * friction level here; the friction's direction stays implicit. Past
- * (w_f/v_S)^2 = 40 the hump is below 5e-18 of itself and is dropped. */
+ * (w_f/v_S)^2 = 40 the hump is 4.2e-18 of its height and is dropped. */
 static GS_NOINLINE gs_real stribeck_level(const rig_consts_ *r, gs_real w_f)
 {
     const gs_real z = w_f * w_f * r->inv_stribeck_speed_sq;
@@ -448,10 +448,9 @@ static inline gs_real friction_level(const rig_consts_ *r, gs_real w_f)
     return r->stribeck ? stribeck_level(r, w_f) : r->load_coulomb;
 }
 
-/* The ripple torque the base shaft must add at base angle theta (N*m):
- * per-revolution harmonics of theta, per-tooth harmonics of Z*theta. The
- * multiples come from the Chebyshev recurrence cos((i+1)x) = 2 cos x cos(ix)
- * - cos((i-1)x) (and the same for sin): one cos/sin pair per angle. */
+/* sum_i a_i*cos(i*x) - b_i*sin(i*x), i.e. sum_i A_i*cos(i*x + phi_i) (N*m).
+ * The multiples come from the Chebyshev recurrence cos((i+1)x) = 2 cos x
+ * cos(ix) - cos((i-1)x) (and the same for sin): one cos/sin pair per angle. */
 static gs_real harmonics(const gs_real *a, const gs_real *b, gs_real angle)
 {
     gs_real c1;
@@ -471,6 +470,8 @@ static gs_real harmonics(const gs_real *a, const gs_real *b, gs_real angle)
     return sum;
 }
 
+/* The ripple torque (physics.md 11.5) the base shaft must add at base angle
+ * theta: per-revolution harmonics of theta, per-tooth harmonics of Z*theta. */
 static gs_real ripple_torque(const rig_consts_ *r, gs_real theta)
 {
     /* Z*theta is formed from the reduced theta: Z is an integer, so the
@@ -552,8 +553,9 @@ static geared_base_end geared_base_step(const rig_consts_ *r, const gs_loss_ctx_
     for (int pass = 0; pass < LINEARISATION_PASSES; ++pass) {
         /* tau_mesh ~ m0 + m1*T_F; J_B dw/h = drive - mu_B w' - a (tau_mesh - T_F) with
          * T_F = push + coulomb - J_F a dw/h - mu_F a w'. (1 - m1) >= 0 unless the
-         * gear self-locks. The Coulomb torque on the follower, in [-F_C, F_C],
-         * reaches the base through q: backward Euler with a set-valued sign. */
+         * gear self-locks. The Coulomb torque on the follower, in [-F, F] with
+         * F the friction level, reaches the base through q: backward Euler
+         * with a set-valued sign. */
         gs_real m0;
         gs_real m1;
         gs_mesh_loss_linearize(m, ctx, e.t_f, a * e.w, &m0, &m1);

@@ -21,6 +21,14 @@
  * never reverses the motion; the meshing loss can likewise stop the follower
  * but not reverse it. In the speed-driven rigid rig the speed is imposed and
  * the Coulomb friction is tanh-smoothed on load_coulomb_speed_threshold.
+ *
+ * Three rig terms go beyond the seed blocks (physics.md 11), each off by
+ * default: a Stribeck hump on the driven side's friction (it then holds at
+ * rest up to the breakaway level), a compliant base shaft (spring and damper
+ * from the drive to the base gear, which turns with base_inertia; speed-driven
+ * base and rigid mesh only; base_torque is then the shaft torque and
+ * base_speed/base_angle the base gear's), and a torque ripple on the base
+ * side, periodic in the base angle per revolution and per tooth.
  */
 #ifndef GEARSIM_RIG_H
 #define GEARSIM_RIG_H

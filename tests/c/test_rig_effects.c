@@ -226,6 +226,15 @@ static shaft_case shaft_setup(int rack, double omega_n, double zeta, double load
     return s;
 }
 
+/* The block's power balance, port_power = loss_power, to rounding of the
+ * port terms (the shaft and the ripple are outside the block). */
+static void assert_block_balance(const gs_rig_output *o)
+{
+    const double scale = fabs((double)o->base_port_torque * (double)o->base_speed)
+                         + fabs((double)o->follower_port_torque * (double)o->follower_speed) + fabs((double)o->loss_power);
+    ASSERT_NEAR(o->port_power, o->loss_power, 0.0, 256.0 * GS_EPS * scale + 1e-300);
+}
+
 /* The shaft's energy relative to the loaded equilibrium (J). */
 static double shaft_energy(const shaft_case *s, const gs_rig_state *st)
 {
@@ -307,6 +316,7 @@ static void test_compliance_step_response(void **state)
         energy[0] = shaft_energy(&s, &rig.s);
         for (int k = 1; k <= N; ++k) {
             gs_rig_step(&rig.c, &rig.s, &in, &out);
+            assert_block_balance(&out);
             const double t = k * dt;
             const double phi = (double)rig.s.shaft_twist;
             const double closed = s.phi_inf * (1.0 - exp(-sigma * t) * (cos(omega_d * t)
@@ -403,8 +413,11 @@ static void test_compliance_with_stribeck(void **state)
             const double w_d = follower_speeds[i] / s.a;
             gs_rig_output out;
             const gs_rig_input in = rig_speed_input(w_d, s.load);
-            for (int k = 0; k < 1000; ++k)
+            for (int k = 0; k < 1000; ++k) {
                 gs_rig_step(&rig.c, &rig.s, &in, &out);
+                assert_block_balance(&out);
+                assert_true((double)out.loss_power >= 0.0);
+            }
             const double v = follower_speeds[i];
             const double t_f = s.load - stribeck_level(coulomb, breakaway, v_s, v) * sgn(v) - mu_f * v;
             ASSERT_NEAR(out.follower_speed, v, TOL_ACC, 0.0);
