@@ -108,6 +108,44 @@ static inline void sg_constant_viscous(gs_simple_gear_params *g, gs_rig_params *
     g->viscous_coefficients[1] = GS_R(0.004);
 }
 
+/* The terms of physics.md 11 beyond the seed blocks, each on
+ * sg_constant (or sg_backlash_smooth) so that its cost is the difference. */
+static inline void sg_stribeck(gs_simple_gear_params *g, gs_rig_params *r)
+{
+    g->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY;
+    r->load_coulomb_friction = GS_R(0.1);
+    r->load_breakaway_friction = GS_R(0.3);
+    r->load_stribeck_speed = GS_R(0.5);
+}
+
+static inline void sg_backlash_stribeck(gs_simple_gear_params *g, gs_rig_params *r)
+{
+    backlash_on(&g->backlash, GS_HARD_STOP_SMOOTH);
+    r->load_coulomb_friction = GS_R(0.1);
+    r->load_breakaway_friction = GS_R(0.3);
+    r->load_stribeck_speed = GS_R(0.5);
+}
+
+/* 50 Hz shaft resonance (J_eff = 0.01 + 0.05/4 kg*m^2): two sub-steps */
+static inline void sg_compliance(gs_simple_gear_params *g, gs_rig_params *r)
+{
+    g->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY;
+    r->base_inertia_kg_m2 = GS_R(0.01);
+    r->compliance_stiffness_Nm_rad = GS_R(2220.0);
+    r->compliance_damping_Nm_s_rad = GS_R(1.0);
+}
+
+static inline void sg_ripple(gs_simple_gear_params *g, gs_rig_params *r)
+{
+    g->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY;
+    r->ripple_revolution_amplitude_Nm[0] = GS_R(0.05);
+    r->ripple_revolution_amplitude_Nm[1] = GS_R(0.02);
+    r->ripple_mesh_amplitude_Nm[0] = GS_R(0.01);
+    r->ripple_mesh_amplitude_Nm[1] = GS_R(0.005);
+    r->ripple_mesh_phase_rad[0] = GS_R(0.3);
+    r->ripple_mesh_teeth = 20;
+}
+
 /* ---- Rack & Pinion configurations (rack mass 2 kg; pinion radius 0.1 m, or
  * 20 teeth x 5 mm = 15.9 mm with the tooth parameterization). */
 static inline void rack_common(gs_rack_pinion_params *p, gs_rig_params *r, int teeth)
@@ -170,6 +208,10 @@ static const bench_config CONFIGS[] = {
     GEAR(sg_backlash_full_damped, "Simple Gear, backlash, full stiffness, damped rebound"),
     GEAR(sg_full, "Simple Gear full rig: backlash + T x load table + heat path + viscous"),
     GEAR(sg_constant_viscous, "Simple Gear, constant efficiency + viscous (Python comparison)"),
+    GEAR(sg_stribeck, "Simple Gear, constant efficiency + Stribeck friction"),
+    GEAR(sg_backlash_stribeck, "Simple Gear, backlash (smooth) + Stribeck friction"),
+    GEAR(sg_compliance, "Simple Gear, constant efficiency + compliant base shaft (50 Hz)"),
+    GEAR(sg_ripple, "Simple Gear, constant efficiency + torque ripple (2 + 2 harmonics, 20 teeth)"),
     RACK(rp_constant_radius, "Rack & Pinion, constant efficiency, radius"),
     RACK(rp_constant_teeth, "Rack & Pinion, constant efficiency, tooth parameters"),
     RACK(rp_temp_radius, "Rack & Pinion, temperature table + thermal mass, radius"),

@@ -3,7 +3,8 @@
  * Coverage: both blocks; speed- and torque-driven bases; rigid mesh and
  * backlash (the three hard-stop laws, the static lock); constant, load-,
  * temperature- and temperature-load-dependent (2-D table) efficiency; model
- * temperature with a heat path, and measured temperature as an input. */
+ * temperature with a heat path, and measured temperature as an input; the
+ * rig's Stribeck friction, compliant base shaft and torque ripple. */
 #include "scenarios.h"
 
 #define STEPS 1000
@@ -360,6 +361,100 @@ static void input_rack_backlash_torque(int k, gs_rig_input *in)
     in->load = GS_R(-4.0) * tri(t, GS_R(0.45));
 }
 
+/* ---- 11. Simple Gear, compliant base shaft (about 60 Hz) with Stribeck
+ * friction and torque ripple, speed-driven: speed steps that ring. */
+static void ripple_on(gs_rig_params *r, int teeth)
+{
+    r->ripple_revolution_amplitude_Nm[0] = GS_R(0.05);
+    r->ripple_revolution_phase_rad[0] = GS_R(0.7);
+    r->ripple_revolution_amplitude_Nm[1] = GS_R(0.02);
+    r->ripple_revolution_phase_rad[1] = GS_R(-1.3);
+    r->ripple_mesh_amplitude_Nm[0] = GS_R(0.01);
+    r->ripple_mesh_phase_rad[0] = GS_R(2.5);
+    r->ripple_mesh_amplitude_Nm[1] = GS_R(0.004);
+    r->ripple_mesh_teeth = teeth;
+}
+
+static gs_status init_gear_compliant_speed(gs_rig_consts *consts, gs_rig_state *state, gs_error *err)
+{
+    gs_simple_gear_params g = gs_simple_gear_params_default();
+    g.teeth_ratio = GS_R(3.0);
+    g.friction_model = GS_FRICTION_CONSTANT_EFFICIENCY;
+    g.efficiency_const = GS_R(0.95);
+    g.viscous_coefficients[1] = GS_R(0.05);
+    gs_rig_params r = gs_rig_params_default();
+    r.base_inertia_kg_m2 = GS_R(2e-3);
+    r.driven_inertia = GS_R(0.05);
+    r.compliance_stiffness_Nm_rad = GS_R(600.0);
+    r.compliance_damping_Nm_s_rad = GS_R(0.05);
+    r.load_coulomb_friction = GS_R(0.2);
+    r.load_breakaway_friction = GS_R(0.6);
+    r.load_stribeck_speed = GS_R(0.5);
+    ripple_on(&r, 17);
+    return gs_rig_init_gear(consts, state, &g, &r, err);
+}
+
+static void input_gear_compliant_speed(int k, gs_rig_input *in)
+{
+    const gs_real t = time_of(k);
+    clear_input(in);
+    in->base_speed = t < GS_R(0.3) ? GS_R(0.0) : (t < GS_R(0.6) ? GS_R(20.0) : GS_R(-8.0));
+    in->load = GS_R(-0.8) * tri(t, GS_R(0.35));
+}
+
+/* ---- 12. Rack & Pinion, Stribeck friction and ripple, torque-driven: the
+ * rack sticks, breaks away, slides and stops. */
+static gs_status init_rack_stribeck_torque(gs_rig_consts *consts, gs_rig_state *state, gs_error *err)
+{
+    gs_rack_pinion_params p = gs_rack_pinion_params_default();
+    p.pinion_radius_m = GS_R(0.02);
+    p.friction_model = GS_FRICTION_CONSTANT_EFFICIENCY;
+    p.efficiency_const = GS_R(0.9);
+    p.rack_viscous_coefficient = GS_R(20.0);
+    gs_rig_params r = gs_rig_params_default();
+    r.base_drive = GS_BASE_TORQUE_DRIVEN;
+    r.base_inertia_kg_m2 = GS_R(1e-4);
+    r.driven_inertia = GS_R(2.0);
+    r.load_coulomb_friction = GS_R(10.0);
+    r.load_breakaway_friction = GS_R(30.0);
+    r.load_stribeck_speed = GS_R(0.013);
+    ripple_on(&r, 20);
+    return gs_rig_init_rack(consts, state, &p, &r, err);
+}
+
+static void input_rack_stribeck_torque(int k, gs_rig_input *in)
+{
+    const gs_real t = time_of(k);
+    clear_input(in);
+    in->base_torque = GS_R(0.9) * wave(t, GS_R(0.5));
+    in->load = GS_R(-5.0) * tri(t, GS_R(0.3));
+}
+
+/* ---- 13. Simple Gear, backlash (smooth) with Stribeck friction and ripple,
+ * speed-driven. */
+static gs_status init_gear_backlash_stribeck_speed(gs_rig_consts *consts, gs_rig_state *state, gs_error *err)
+{
+    gs_simple_gear_params g = gs_simple_gear_params_default();
+    g.friction_model = GS_FRICTION_CONSTANT_EFFICIENCY;
+    g.backlash.enabled = 1;
+    g.backlash.linear_backlash_m = GS_R(5e-4);
+    gs_rig_params r = gs_rig_params_default();
+    r.driven_inertia = GS_R(0.02);
+    r.load_coulomb_friction = GS_R(0.1);
+    r.load_breakaway_friction = GS_R(0.35);
+    r.load_stribeck_speed = GS_R(0.2);
+    ripple_on(&r, 23);
+    return gs_rig_init_gear(consts, state, &g, &r, err);
+}
+
+static void input_gear_backlash_stribeck_speed(int k, gs_rig_input *in)
+{
+    const gs_real t = time_of(k);
+    clear_input(in);
+    in->base_speed = GS_R(3.0) * wave(t, GS_R(0.6));
+    in->load = GS_R(0.3) * tri(t, GS_R(0.2));
+}
+
 const fw_scenario fw_scenarios[] = {
     {"gear_const_speed", init_gear_const_speed, input_gear_const_speed, STEPS},
     {"gear_const_torque", init_gear_const_torque, input_gear_const_torque, STEPS},
@@ -371,6 +466,9 @@ const fw_scenario fw_scenarios[] = {
     {"rack_temp_speed", init_rack_temp_speed, input_rack_temp_speed, STEPS},
     {"rack_temp_torque", init_rack_temp_torque, input_rack_temp_torque, STEPS},
     {"rack_backlash_torque", init_rack_backlash_torque, input_rack_backlash_torque, STEPS},
+    {"gear_compliant_speed", init_gear_compliant_speed, input_gear_compliant_speed, STEPS},
+    {"rack_stribeck_torque", init_rack_stribeck_torque, input_rack_stribeck_torque, STEPS},
+    {"gear_backlash_stribeck_speed", init_gear_backlash_stribeck_speed, input_gear_backlash_stribeck_speed, STEPS},
 };
 
 const int fw_scenario_count = (int)(sizeof fw_scenarios / sizeof fw_scenarios[0]);

@@ -5,7 +5,10 @@
  * Cases: teeth ratio 1e-3 and 1e3 (rigid and with backlash), stiffness 1e9
  * (three hard-stop laws, gear and rack), thermal mass 1e-6 J/K (adiabatic and
  * with a heat path), tables of GS_TABLE_MAX entries (1-D and 10 x 10), and
- * combinations; each on a speed-driven and a torque-driven rig, 2000 steps
+ * combinations; the rig terms at their edges (shaft stiffness 1e9 and 1e-6,
+ * Stribeck speed 1e-9 and 1e3, ripple 1e3 N*m at 1000 teeth with phases of
+ * 1e6 rad); each on a speed-driven and a torque-driven rig (the compliant
+ * shaft: speed-driven only), 2000 steps
  * of 1 ms with speed up to 100 rad/s, torque up to 5 N*m and load up to
  * 10 N*m (or N). Prints one line per case; exit 1 when an init fails or an
  * output is not finite. */
@@ -21,6 +24,8 @@ typedef struct {
     int rack;
     void (*gear)(gs_simple_gear_params *p);
     void (*rack_p)(gs_rack_pinion_params *p);
+    void (*rig)(gs_rig_params *p); /* the rig terms of physics.md 11, or NULL */
+    int speed_only;                 /* the compliant shaft needs a speed-driven base */
 } edge_case;
 
 static void backlash(gs_backlash_params *b, gs_hard_stop_model law, double stiffness)
@@ -102,24 +107,68 @@ static void rack_all(gs_rack_pinion_params *p)
     p->backlash.lock_enabled = 1;
 }
 
+static void gear_plain(gs_simple_gear_params *p) { p->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY; }
+static void rack_plain(gs_rack_pinion_params *p) { p->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY; }
+/* far stiffer than 16 sub-steps resolve at 1 ms: h*omega_n about 5e3 */
+static void shaft_stiff(gs_rig_params *p) { p->compliance_stiffness_Nm_rad = (gs_real)1e9; }
+static void shaft_stiff_damped(gs_rig_params *p) { shaft_stiff(p); p->compliance_damping_Nm_s_rad = (gs_real)1e6; }
+static void shaft_soft(gs_rig_params *p) { p->compliance_stiffness_Nm_rad = (gs_real)1e-6; }
+static void stribeck_sharp(gs_rig_params *p)
+{
+    p->load_coulomb_friction = (gs_real)1.0;
+    p->load_breakaway_friction = (gs_real)8.0;
+    p->load_stribeck_speed = (gs_real)1e-9;
+}
+static void stribeck_wide(gs_rig_params *p)
+{
+    p->load_breakaway_friction = (gs_real)1e4;
+    p->load_stribeck_speed = (gs_real)1e3;
+}
+static void ripple_large(gs_rig_params *p)
+{
+    for (int i = 0; i < GS_RIPPLE_HARMONICS; ++i) {
+        p->ripple_revolution_amplitude_Nm[i] = (gs_real)1e3;
+        p->ripple_mesh_amplitude_Nm[i] = (gs_real)1e3;
+        p->ripple_revolution_phase_rad[i] = (gs_real)1e6;
+        p->ripple_mesh_phase_rad[i] = (gs_real)-1e6;
+    }
+    p->ripple_mesh_teeth = 1000;
+}
+static void all_terms(gs_rig_params *p)
+{
+    shaft_stiff_damped(p);
+    stribeck_sharp(p);
+    ripple_large(p);
+}
+
 static const edge_case cases[] = {
-    {"teeth_ratio 1e-3", 0, ratio_small, NULL},
-    {"teeth_ratio 1e3", 0, ratio_large, NULL},
-    {"teeth_ratio 1e-3 + backlash", 0, ratio_small_backlash, NULL},
-    {"teeth_ratio 1e3 + backlash", 0, ratio_large_backlash, NULL},
-    {"teeth_ratio 1e-3, load-dependent", 0, ratio_small_load, NULL},
-    {"teeth_ratio 1e3, load-dependent", 0, ratio_large_load, NULL},
-    {"stiffness 1e9 smooth", 0, stiff_smooth, NULL},
-    {"stiffness 1e9 full undamped", 0, stiff_undamped, NULL},
-    {"stiffness 1e9 full damped + lock", 0, stiff_damped_lock, NULL},
-    {"thermal mass 1e-6", 0, tiny_thermal, NULL},
-    {"tables GS_TABLE_MAX (10, 10x10)", 0, max_tables, NULL},
-    {"10x10 table + C 1e-6 + K 1e9", 0, max_tables_tiny_thermal_stiff, NULL},
-    {"ratio 1e-3 + C 1e-6 + K 1e9", 0, everything_small, NULL},
-    {"ratio 1e3 + 10x10 + C 1e-6 + K 1e9", 0, everything_large, NULL},
-    {"rack stiffness 1e9", 1, NULL, rack_stiff},
-    {"rack table 10 + C 1e-6", 1, NULL, rack_max_table_tiny_thermal},
-    {"rack table 10 + C 1e-6 + K 1e9 + lock", 1, NULL, rack_all},
+    {"teeth_ratio 1e-3", 0, ratio_small, NULL, NULL, 0},
+    {"teeth_ratio 1e3", 0, ratio_large, NULL, NULL, 0},
+    {"teeth_ratio 1e-3 + backlash", 0, ratio_small_backlash, NULL, NULL, 0},
+    {"teeth_ratio 1e3 + backlash", 0, ratio_large_backlash, NULL, NULL, 0},
+    {"teeth_ratio 1e-3, load-dependent", 0, ratio_small_load, NULL, NULL, 0},
+    {"teeth_ratio 1e3, load-dependent", 0, ratio_large_load, NULL, NULL, 0},
+    {"stiffness 1e9 smooth", 0, stiff_smooth, NULL, NULL, 0},
+    {"stiffness 1e9 full undamped", 0, stiff_undamped, NULL, NULL, 0},
+    {"stiffness 1e9 full damped + lock", 0, stiff_damped_lock, NULL, NULL, 0},
+    {"thermal mass 1e-6", 0, tiny_thermal, NULL, NULL, 0},
+    {"tables GS_TABLE_MAX (10, 10x10)", 0, max_tables, NULL, NULL, 0},
+    {"10x10 table + C 1e-6 + K 1e9", 0, max_tables_tiny_thermal_stiff, NULL, NULL, 0},
+    {"ratio 1e-3 + C 1e-6 + K 1e9", 0, everything_small, NULL, NULL, 0},
+    {"ratio 1e3 + 10x10 + C 1e-6 + K 1e9", 0, everything_large, NULL, NULL, 0},
+    {"rack stiffness 1e9", 1, NULL, rack_stiff, NULL, 0},
+    {"rack table 10 + C 1e-6", 1, NULL, rack_max_table_tiny_thermal, NULL, 0},
+    {"rack table 10 + C 1e-6 + K 1e9 + lock", 1, NULL, rack_all, NULL, 0},
+    {"shaft k 1e9", 0, gear_plain, NULL, shaft_stiff, 1},
+    {"shaft k 1e9, c 1e6", 0, gear_plain, NULL, shaft_stiff_damped, 1},
+    {"shaft k 1e-6, ratio 1e3", 0, ratio_large, NULL, shaft_soft, 1},
+    {"rack shaft k 1e9", 1, NULL, rack_plain, shaft_stiff, 1},
+    {"Stribeck v_S 1e-9", 0, gear_plain, NULL, stribeck_sharp, 0},
+    {"Stribeck F_brk 1e4, v_S 1e3 + backlash", 0, stiff_smooth, NULL, stribeck_wide, 0},
+    {"rack Stribeck v_S 1e-9 + K 1e9", 1, NULL, rack_stiff, stribeck_sharp, 0},
+    {"ripple 1e3 N*m, Z 1000, phases 1e6", 0, gear_plain, NULL, ripple_large, 0},
+    {"rack ripple + K 1e9", 1, NULL, rack_stiff, ripple_large, 0},
+    {"shaft k 1e9 + Stribeck + ripple", 0, ratio_small, NULL, all_terms, 1},
 };
 
 /* Triangle wave in [-1, 1]. */
@@ -136,6 +185,9 @@ static int run(const edge_case *c, gs_base_drive drive, int heat_path)
     rp.base_inertia_kg_m2 = (gs_real)1e-3;
     rp.heat_path = heat_path;
     rp.driven_inertia = c->rack ? (gs_real)5.0 : (gs_real)0.05;
+    if (c->rig != NULL) {
+        c->rig(&rp);
+    }
     gs_rig_consts consts;
     gs_rig_state state;
     gs_error err;
@@ -192,7 +244,7 @@ int main(void)
 {
     int failures = 0, runs = 0;
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
-        for (int drive = 0; drive < 2; ++drive) {
+        for (int drive = 0; drive < (cases[i].speed_only ? 1 : 2); ++drive) {
             for (int heat = 0; heat < 2; ++heat) {
                 failures += run(&cases[i], drive ? GS_BASE_TORQUE_DRIVEN : GS_BASE_SPEED_DRIVEN, heat);
                 ++runs;

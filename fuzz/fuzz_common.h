@@ -241,6 +241,16 @@ static const fz_field fz_rig_fields[] = {
     FZ_F(gs_rig_params, temperature_source, FZ_ENUM),
     FZ_F(gs_rig_params, accel_filter_time_constant_s, FZ_REAL),
     FZ_F(gs_rig_params, contact_substeps, FZ_INT),
+    /* appended: the indices above keep their meaning for the seeds */
+    FZ_F(gs_rig_params, load_breakaway_friction, FZ_REAL),
+    FZ_F(gs_rig_params, load_stribeck_speed, FZ_REAL),
+    FZ_F(gs_rig_params, compliance_stiffness_Nm_rad, FZ_REAL),
+    FZ_F(gs_rig_params, compliance_damping_Nm_s_rad, FZ_REAL),
+    FZ_A(gs_rig_params, ripple_revolution_amplitude_Nm, GS_RIPPLE_HARMONICS),
+    FZ_A(gs_rig_params, ripple_revolution_phase_rad, GS_RIPPLE_HARMONICS),
+    FZ_A(gs_rig_params, ripple_mesh_amplitude_Nm, GS_RIPPLE_HARMONICS),
+    FZ_A(gs_rig_params, ripple_mesh_phase_rad, GS_RIPPLE_HARMONICS),
+    FZ_F(gs_rig_params, ripple_mesh_teeth, FZ_INT),
 };
 
 #define FZ_COUNT(a) (sizeof(a) / sizeof((a)[0]))

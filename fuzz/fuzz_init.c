@@ -82,13 +82,26 @@ static int rack_in_envelope(const gs_rack_pinion_params *p)
            backlash_in_envelope(&p->backlash, 0);
 }
 
+static int ripple_in_envelope(const gs_rig_params *p)
+{
+    for (int i = 0; i < GS_RIPPLE_HARMONICS; ++i) {
+        if (!in_mag(p->ripple_revolution_amplitude_Nm[i], 1e-9, 1e4) || !in_mag(p->ripple_mesh_amplitude_Nm[i], 1e-9, 1e4) ||
+            !in_mag(p->ripple_revolution_phase_rad[i], 0.0, 1e6) || !in_mag(p->ripple_mesh_phase_rad[i], 0.0, 1e6)) {
+            return 0;
+        }
+    }
+    return p->ripple_mesh_teeth <= 1000;
+}
+
 static int rig_in_envelope(const gs_rig_params *p)
 {
     return in_mag(p->dt_s, 1e-6, 0.1) && in_mag(p->base_inertia_kg_m2, 1e-7, 1e3) &&
            in_mag(p->initial_base_speed_rad_s, 1e-9, 1e3) && in_mag(p->driven_inertia, 1e-7, 1e4) &&
            in_mag(p->load_coulomb_friction, 1e-9, 1e4) && in_mag(p->load_coulomb_speed_threshold, 1e-9, 1e3) &&
            in_mag(p->load_offset, 1e-9, 1e4) && in_mag(p->thermal_resistance_K_W, 1e-6, 1e6) &&
-           in_mag(p->accel_filter_time_constant_s, 1e-9, 1e3);
+           in_mag(p->accel_filter_time_constant_s, 1e-9, 1e3) && in_mag(p->load_breakaway_friction, 1e-9, 1e4) &&
+           in_mag(p->load_stribeck_speed, 1e-9, 1e3) && in_mag(p->compliance_stiffness_Nm_rad, 1e-6, 1e9) &&
+           in_mag(p->compliance_damping_Nm_s_rad, 1e-9, 1e6) && ripple_in_envelope(p);
 }
 
 static void check_error(gs_status st, const gs_error *err, int pattern_ok)

@@ -51,6 +51,26 @@ typedef struct {
     gs_contact_step_ contact;      /* backward-Euler contact constants for h */
     gs_contact_step_ contact_stuck;/* the same with the driven side held by its friction
                                       (torque-driven base: the base inertia alone) */
+    /* Stribeck friction: F(v) = F_C + excess*exp(-v^2/v_S^2) */
+    int stribeck;
+    gs_real stribeck_excess;       /* F_brk - F_C, N*m or N */
+    gs_real inv_stribeck_speed_sq; /* 1/v_S^2 */
+    /* compliance: spring k and damper c from the drive to the base gear */
+    int compliant;
+    int compliance_substeps;
+    gs_real stiffness;             /* k, N*m/rad */
+    gs_real shaft_damping;         /* c, N*m*s/rad */
+    gs_real compliance_h;          /* sub-step h = dt/compliance_substeps, s */
+    gs_real inv_compliance_substeps;
+    gs_real compliance_gain;       /* k*h/2 + c: d(shaft torque)/d(relative speed), midpoint rule */
+    gs_real compliance_h_omega_n;
+    /* torque ripple: A*cos(i*theta + phi) = a_i*cos(i*theta) - b_i*sin(i*theta) */
+    int ripple;
+    int mesh_teeth;
+    gs_real ripple_rev_cos[GS_RIPPLE_HARMONICS];  /* a_i = A_i*cos(phi_i), N*m */
+    gs_real ripple_rev_sin[GS_RIPPLE_HARMONICS];  /* b_i = A_i*sin(phi_i), N*m */
+    gs_real ripple_mesh_cos[GS_RIPPLE_HARMONICS];
+    gs_real ripple_mesh_sin[GS_RIPPLE_HARMONICS];
 } rig_consts_;
 
 GS_STATIC_ASSERT_(rig_consts_size, sizeof(gs_rig_consts) >= sizeof(rig_consts_));
@@ -78,10 +98,76 @@ gs_rig_params gs_rig_params_default(void)
     p.temperature_source = GS_TEMPERATURE_FROM_MODEL;
     p.accel_filter_time_constant_s = GS_R(0.0);
     p.contact_substeps = 0;
+    p.load_breakaway_friction = GS_R(0.0);
+    p.load_stribeck_speed = GS_R(0.01);
+    p.compliance_stiffness_Nm_rad = GS_R(0.0);
+    p.compliance_damping_Nm_s_rad = GS_R(0.0);
+    for (int i = 0; i < GS_RIPPLE_HARMONICS; ++i) {
+        p.ripple_revolution_amplitude_Nm[i] = GS_R(0.0);
+        p.ripple_revolution_phase_rad[i] = GS_R(0.0);
+        p.ripple_mesh_amplitude_Nm[i] = GS_R(0.0);
+        p.ripple_mesh_phase_rad[i] = GS_R(0.0);
+    }
+    p.ripple_mesh_teeth = 0;
     return p;
 }
 
-static gs_status check_rig(const gs_rig_params *p, gs_rig_block block, gs_error *err)
+/* Stribeck: a breakaway level of 0 is none; any other must be >= F_C. */
+static gs_status check_stribeck(const gs_rig_params *p, gs_error *err)
+{
+    gs_status s = gs_check_nonnegative(err, p->load_breakaway_friction, "load_breakaway_friction");
+    if (s != GS_OK || !(p->load_breakaway_friction > GS_R(0.0))) {
+        return s;
+    }
+    if (p->load_breakaway_friction < p->load_coulomb_friction) {
+        return gs_fail(err, GS_E_BREAKAWAY, "load_breakaway_friction");
+    }
+    if ((s = gs_check_invertible(err, p->load_stribeck_speed, "load_stribeck_speed")) != GS_OK) {
+        return s;
+    }
+    /* 1/v_S^2 is what the step uses */
+    return gs_check_invertible(err, p->load_stribeck_speed * p->load_stribeck_speed, "load_stribeck_speed");
+}
+
+/* Compliance: the spring needs a base gear of its own (base_inertia > 0) that
+ * only a speed-driven base on a rigid mesh provides in this version. */
+static gs_status check_compliance(const gs_rig_params *p, int backlash, gs_error *err)
+{
+    gs_status s;
+    if ((s = gs_check_nonnegative(err, p->compliance_stiffness_Nm_rad, "compliance_stiffness")) != GS_OK ||
+        (s = gs_check_nonnegative(err, p->compliance_damping_Nm_s_rad, "compliance_damping")) != GS_OK ||
+        !(p->compliance_stiffness_Nm_rad > GS_R(0.0))) {
+        return s;
+    }
+    if (p->base_drive != GS_BASE_SPEED_DRIVEN || backlash) {
+        return gs_fail(err, GS_E_COMBINATION, "compliance_stiffness");
+    }
+    return gs_check_invertible(err, p->base_inertia_kg_m2, "base_inertia");
+}
+
+static gs_status check_ripple(const gs_rig_params *p, gs_error *err)
+{
+    gs_status s;
+    int mesh_harmonics = 0;
+    for (int i = 0; i < GS_RIPPLE_HARMONICS; ++i) {
+        if ((s = gs_check_nonnegative(err, p->ripple_revolution_amplitude_Nm[i], "ripple_revolution_amplitude")) != GS_OK ||
+            (s = gs_check_finite(err, p->ripple_revolution_phase_rad[i], "ripple_revolution_phase")) != GS_OK ||
+            (s = gs_check_nonnegative(err, p->ripple_mesh_amplitude_Nm[i], "ripple_mesh_amplitude")) != GS_OK ||
+            (s = gs_check_finite(err, p->ripple_mesh_phase_rad[i], "ripple_mesh_phase")) != GS_OK) {
+            return s;
+        }
+        mesh_harmonics |= p->ripple_mesh_amplitude_Nm[i] > GS_R(0.0);
+    }
+    if (p->ripple_mesh_teeth < 0) {
+        return gs_fail(err, GS_E_NEGATIVE, "ripple_mesh_teeth");
+    }
+    if (mesh_harmonics && p->ripple_mesh_teeth == 0) {
+        return gs_fail(err, GS_E_NOT_POSITIVE, "ripple_mesh_teeth");
+    }
+    return GS_OK;
+}
+
+static gs_status check_rig(const gs_rig_params *p, gs_rig_block block, int backlash, gs_error *err)
 {
     gs_status s;
     if (!gs_is_finite(p->dt_s) || !(p->dt_s > GS_R(0.0))) {
@@ -125,7 +211,10 @@ static gs_status check_rig(const gs_rig_params *p, gs_rig_block block, gs_error 
     if (p->contact_substeps < 0 || p->contact_substeps > GS_MAX_SUBSTEPS) {
         return gs_fail(err, GS_E_SUBSTEPS, "contact_substeps");
     }
-    return GS_OK;
+    if ((s = check_stribeck(p, err)) != GS_OK || (s = check_compliance(p, backlash, err)) != GS_OK) {
+        return s;
+    }
+    return check_ripple(p, err);
 }
 
 /* The torque-driven base's share of 1/m_eff at the pitch line for sub-step
@@ -163,11 +252,9 @@ static int automatic_substeps(const rig_consts_ *r)
     return n;
 }
 
-/* h*omega_n of the contact at sub-step h with 1/m_eff = inv_mass
- * (omega_n = sqrt(K/m_eff)). */
-static gs_real contact_h_omega_n(const rig_consts_ *r, gs_real h, gs_real inv_mass)
+/* sqrt(x2) for x2 >= 0 at init. */
+static gs_real init_sqrt(gs_real x2)
 {
-    const gs_real x2 = h * h * r->mesh.stiffness * inv_mass;
     /* Newton for the square root (the core uses no libm), from above: it
      * decreases monotonically to the root; init only, so the count is loose */
     gs_real y = x2 > GS_R(1.0) ? x2 : GS_R(1.0);
@@ -179,6 +266,71 @@ static gs_real contact_h_omega_n(const rig_consts_ *r, gs_real h, gs_real inv_ma
         y = next;
     }
     return y;
+}
+
+/* h*omega_n of the contact at sub-step h with 1/m_eff = inv_mass
+ * (omega_n = sqrt(K/m_eff)). */
+static gs_real contact_h_omega_n(const rig_consts_ *r, gs_real h, gs_real inv_mass)
+{
+    return init_sqrt(h * h * r->mesh.stiffness * inv_mass);
+}
+
+/* The compliant shaft: k over J_eff = J_B + a^2*J_F (base gear and driven
+ * side geared rigidly), sub-stepped so that h*omega_c <= 0.2, where the
+ * midpoint rule's frequency is within 0.4 % (physics.md 11), up to
+ * GS_AUTO_SUBSTEPS_MAX. */
+static void compliance_fill(rig_consts_ *r, const gs_rig_params *p)
+{
+    const gs_real a = r->mesh.inv_ratio;
+    r->compliant = p->compliance_stiffness_Nm_rad > GS_R(0.0);
+    r->stiffness = p->compliance_stiffness_Nm_rad;
+    r->shaft_damping = p->compliance_damping_Nm_s_rad;
+    r->compliance_substeps = 1;
+    r->compliance_h_omega_n = GS_R(0.0);
+    if (r->compliant) {
+        const gs_real omega_sq = r->stiffness / (r->base_inertia + a * a * r->driven_inertia);
+        while (r->compliance_substeps < GS_AUTO_SUBSTEPS_MAX) {
+            const gs_real h = r->dt / (gs_real)r->compliance_substeps;
+            if (h * h * omega_sq <= GS_R(0.04)) {
+                break;
+            }
+            ++r->compliance_substeps;
+        }
+        const gs_real h = r->dt / (gs_real)r->compliance_substeps;
+        r->compliance_h_omega_n = init_sqrt(h * h * omega_sq);
+    }
+    r->compliance_h = r->dt / (gs_real)r->compliance_substeps;
+    r->inv_compliance_substeps = GS_R(1.0) / (gs_real)r->compliance_substeps;
+    r->compliance_gain = GS_R(0.5) * r->stiffness * r->compliance_h + r->shaft_damping;
+}
+
+/* cos and sin of any angle: one copy of the polynomials for init and step. */
+static GS_NOINLINE void cos_sin(gs_real angle, gs_real *c, gs_real *s)
+{
+    gs_cos_sin(gs_reduce_angle(angle), c, s);
+}
+
+/* a = A*cos(phi), b = A*sin(phi) of each harmonic. */
+static void ripple_fill(rig_consts_ *r, const gs_rig_params *p)
+{
+    int mesh_harmonics = 0;
+    r->ripple = 0;
+    r->mesh_teeth = p->ripple_mesh_teeth;
+    for (int i = 0; i < GS_RIPPLE_HARMONICS; ++i) {
+        gs_real c;
+        gs_real s;
+        cos_sin(p->ripple_revolution_phase_rad[i], &c, &s);
+        r->ripple_rev_cos[i] = p->ripple_revolution_amplitude_Nm[i] * c;
+        r->ripple_rev_sin[i] = p->ripple_revolution_amplitude_Nm[i] * s;
+        cos_sin(p->ripple_mesh_phase_rad[i], &c, &s);
+        r->ripple_mesh_cos[i] = p->ripple_mesh_amplitude_Nm[i] * c;
+        r->ripple_mesh_sin[i] = p->ripple_mesh_amplitude_Nm[i] * s;
+        r->ripple |= p->ripple_revolution_amplitude_Nm[i] > GS_R(0.0) || p->ripple_mesh_amplitude_Nm[i] > GS_R(0.0);
+        mesh_harmonics |= p->ripple_mesh_amplitude_Nm[i] > GS_R(0.0);
+    }
+    if (!mesh_harmonics) { /* the step skips the tooth-mesh angle */
+        r->mesh_teeth = 0;
+    }
 }
 
 /* Fills the rig around an already validated mesh; the rig parameters were
@@ -221,6 +373,12 @@ static void rig_fill(rig_consts_ *r, const gs_rig_params *p)
         r->contact_h_omega_n = contact_h_omega_n(r, r->substep, inv_eff_mass);
         r->substeps_capped = p->contact_substeps == 0 && r->contact_h_omega_n > GS_R(0.5);
     }
+    r->stribeck = p->load_breakaway_friction > GS_R(0.0);
+    r->stribeck_excess = r->stribeck ? p->load_breakaway_friction - p->load_coulomb_friction : GS_R(0.0);
+    r->inv_stribeck_speed_sq =
+        r->stribeck ? GS_R(1.0) / (p->load_stribeck_speed * p->load_stribeck_speed) : GS_R(0.0);
+    compliance_fill(r, p);
+    ripple_fill(r, p);
 }
 
 /* The rig parameters are checked first, so that once the block's mesh is
@@ -235,7 +393,7 @@ gs_status gs_rig_init_gear(gs_rig_consts *consts, gs_rig_state *state,
                        consts == NULL ? "consts" : (state == NULL ? "state" : (gear == NULL ? "gear" : "params")));
     }
     rig_consts_ *r = (rig_consts_ *)(void *)consts;
-    gs_status s = check_rig(params, GS_RIG_SIMPLE_GEAR, err);
+    gs_status s = check_rig(params, GS_RIG_SIMPLE_GEAR, gear->backlash.enabled, err);
     if (s == GS_OK && (s = gs_simple_gear_mesh(&r->mesh, gear, err)) == GS_OK) {
         rig_fill(r, params);
         gs_rig_reset(consts, state);
@@ -252,7 +410,7 @@ gs_status gs_rig_init_rack(gs_rig_consts *consts, gs_rig_state *state,
                        consts == NULL ? "consts" : (state == NULL ? "state" : (rack == NULL ? "rack" : "params")));
     }
     rig_consts_ *r = (rig_consts_ *)(void *)consts;
-    gs_status s = check_rig(params, GS_RIG_RACK_PINION, err);
+    gs_status s = check_rig(params, GS_RIG_RACK_PINION, rack->backlash.enabled, err);
     if (s == GS_OK && (s = gs_rack_pinion_mesh(&r->mesh, rack, err)) == GS_OK) {
         rig_fill(r, params);
         gs_rig_reset(consts, state);
@@ -271,14 +429,67 @@ void gs_rig_reset(const gs_rig_consts *consts, gs_rig_state *st)
     st->follower_position = GS_R(0.0);
     st->base_speed_sample = GS_R(0.0);
     st->base_acceleration = GS_R(0.0);
+    st->shaft_twist = GS_R(0.0);
+}
+
+/* The driven side's friction level at speed w_f: F_C, plus the Stribeck
+ * hump (F_brk - F_C)*exp(-(w_f/v_S)^2), which is F_brk at rest. Evaluated at
+ * the speed a (sub-)step starts from: explicit, like any speed-dependent
+ * friction level here; the friction's direction stays implicit. Past
+ * (w_f/v_S)^2 = 40 the hump is 4.2e-18 of its height and is dropped. */
+static GS_NOINLINE gs_real stribeck_level(const rig_consts_ *r, gs_real w_f)
+{
+    const gs_real z = w_f * w_f * r->inv_stribeck_speed_sq;
+    return z < GS_R(40.0) ? r->load_coulomb + r->stribeck_excess * gs_exp_neg(z) : r->load_coulomb;
+}
+
+static inline gs_real friction_level(const rig_consts_ *r, gs_real w_f)
+{
+    return r->stribeck ? stribeck_level(r, w_f) : r->load_coulomb;
+}
+
+/* sum_i a_i*cos(i*x) - b_i*sin(i*x), i.e. sum_i A_i*cos(i*x + phi_i) (N*m).
+ * The multiples come from the Chebyshev recurrence cos((i+1)x) = 2 cos x
+ * cos(ix) - cos((i-1)x) (and the same for sin): one cos/sin pair per angle. */
+static gs_real harmonics(const gs_real *a, const gs_real *b, gs_real angle)
+{
+    gs_real c1;
+    gs_real s1;
+    cos_sin(angle, &c1, &s1);
+    gs_real c_prev = GS_R(1.0), s_prev = GS_R(0.0), c = c1, sn = s1;
+    gs_real sum = GS_R(0.0);
+    for (int i = 0; i < GS_RIPPLE_HARMONICS; ++i) {
+        sum += a[i] * c - b[i] * sn;
+        const gs_real c_next = GS_R(2.0) * c1 * c - c_prev;
+        const gs_real s_next = GS_R(2.0) * c1 * sn - s_prev;
+        c_prev = c;
+        s_prev = sn;
+        c = c_next;
+        sn = s_next;
+    }
+    return sum;
+}
+
+/* The ripple torque (physics.md 11.5) the base shaft must add at base angle
+ * theta: per-revolution harmonics of theta, per-tooth harmonics of Z*theta. */
+static gs_real ripple_torque(const rig_consts_ *r, gs_real theta)
+{
+    /* Z*theta is formed from the reduced theta: Z is an integer, so the
+     * phase survives where Z*theta itself would have lost it */
+    const gs_real reduced = gs_reduce_angle(theta);
+    gs_real tau = harmonics(r->ripple_rev_cos, r->ripple_rev_sin, reduced);
+    if (r->mesh_teeth > 0) {
+        tau += harmonics(r->ripple_mesh_cos, r->ripple_mesh_sin, (gs_real)r->mesh_teeth * reduced);
+    }
+    return tau;
 }
 
 /* External torque on the driven side of the speed-driven rigid rig: load,
- * offset and Coulomb friction smoothed on the imposed speed. */
+ * offset and Coulomb (and Stribeck) friction smoothed on the imposed speed. */
 static gs_real driven_external(const rig_consts_ *r, gs_real load, gs_real w_f)
 {
     return load + r->load_offset
-           - r->load_coulomb * gs_tanh(GS_R(4.0) * w_f * r->inv_load_speed_threshold);
+           - friction_level(r, w_f) * gs_tanh(GS_R(4.0) * w_f * r->inv_load_speed_threshold);
 }
 
 /* Backward Euler on a speed with a friction of magnitude <= bound (both in
@@ -309,6 +520,9 @@ static void rigid_speed_driven(const rig_consts_ *r, gs_rig_state *st, const gs_
     st->base_speed = w_b;
     st->follower_speed = w_f;
     out->base_torque = tau_b + r->base_inertia * alpha_b;
+    if (r->ripple) { /* at the step's mid angle: the mean over the step to second order */
+        out->base_torque += ripple_torque(r, st->base_angle + GS_R(0.5) * r->dt * w_b);
+    }
     out->base_port_torque = tau_b;
     out->follower_port_torque = tau_f;
     out->follower_acceleration = a_f;
@@ -317,36 +531,66 @@ static void rigid_speed_driven(const rig_consts_ *r, gs_rig_state *st, const gs_
     out->port_power = tau_b * w_b + tau_f * w_f;
 }
 
+/* A base gear of inertia J_B geared rigidly to the driven side, over a
+ * (sub-)step h from speed w: the end speed and the net follower torque T_F
+ * (seeded with t_f). drive is the explicit torque on the base gear;
+ * drive_slope*w_end is taken off it implicitly (the compliant shaft's share
+ * that depends on the end speed; 0 for a motor). */
+typedef struct {
+    gs_real w;   /* base speed at the end */
+    gs_real dw;  /* its change */
+    gs_real t_f; /* T_F */
+} geared_base_end;
+
+static geared_base_end geared_base_step(const rig_consts_ *r, const gs_loss_ctx_ *ctx, gs_real h, gs_real w, gs_real t_f,
+                                        gs_real drive, gs_real drive_slope, gs_real push)
+{
+    const gs_mesh_ *m = &r->mesh;
+    const gs_real a = m->inv_ratio;
+    /* the friction level at the start speed (Stribeck: explicit in the speed) */
+    const gs_real level = friction_level(r, a * w);
+    geared_base_end e = {w, GS_R(0.0), t_f};
+    for (int pass = 0; pass < LINEARISATION_PASSES; ++pass) {
+        /* tau_mesh ~ m0 + m1*T_F; J_B dw/h = drive - mu_B w' - a (tau_mesh - T_F) with
+         * T_F = push + coulomb - J_F a dw/h - mu_F a w'. (1 - m1) >= 0 unless the
+         * gear self-locks. The Coulomb torque on the follower, in [-F, F] with
+         * F the friction level, reaches the base through q: backward Euler
+         * with a set-valued sign. */
+        gs_real m0;
+        gs_real m1;
+        gs_mesh_loss_linearize(m, ctx, e.t_f, a * e.w, &m0, &m1);
+        const gs_real q = a * gs_max(GS_R(1.0) - m1, GS_R(0.0));
+        const gs_real visc = m->mu_base + q * m->mu_follower * a + drive_slope;
+        const gs_real denominator = (r->base_inertia + q * a * r->driven_inertia) / h + visc;
+        const gs_real w_free = w + (drive - a * m0 + q * push - visc * w) / denominator;
+        const gs_real bound = gs_abs(q) * level / denominator;
+        e.w = friction_project(w_free, bound);
+        e.dw = e.w - w;
+        /* the Coulomb torque that gives w_next: -F_C*sign(w_F) sliding, what holds it at rest */
+        const gs_real coulomb = bound > GS_R(0.0) ? (e.w - w_free) * denominator / q : GS_R(0.0);
+        e.t_f = push + coulomb - r->driven_inertia * a * e.dw / h - m->mu_follower * a * e.w;
+    }
+    return e;
+}
+
 static void rigid_torque_driven(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
                                 gs_rig_output *out)
 {
     const gs_mesh_ *m = &r->mesh;
     const gs_real h = r->dt;
     const gs_real a = m->inv_ratio;
-    const gs_real w = st->base_speed;
     const gs_real push = in->load + r->load_offset;
-    gs_real t_f = st->block.follower_torque;
-    gs_real w_next = w;
-    gs_real dw = GS_R(0.0);
-    for (int pass = 0; pass < LINEARISATION_PASSES; ++pass) {
-        /* tau_mesh ~ m0 + m1*T_F; J_B dw/h = tau_m - mu_B w' - a (tau_mesh - T_F) with
-         * T_F = push + coulomb - J_F a dw/h - mu_F a w'. (1 - m1) >= 0 unless the
-         * gear self-locks. The Coulomb torque on the follower, in [-F_C, F_C],
-         * reaches the base through q: backward Euler with a set-valued sign. */
-        gs_real m0;
-        gs_real m1;
-        gs_mesh_loss_linearize(m, ctx, t_f, a * w_next, &m0, &m1);
-        const gs_real q = a * gs_max(GS_R(1.0) - m1, GS_R(0.0));
-        const gs_real visc = m->mu_base + q * m->mu_follower * a;
-        const gs_real denominator = (r->base_inertia + q * a * r->driven_inertia) / h + visc;
-        const gs_real w_free = w + (in->base_torque - a * m0 + q * push - visc * w) / denominator;
-        const gs_real bound = gs_abs(q) * r->load_coulomb / denominator;
-        w_next = friction_project(w_free, bound);
-        dw = w_next - w;
-        /* the Coulomb torque that gives w_next: -F_C*sign(w_F) sliding, what holds it at rest */
-        const gs_real coulomb = bound > GS_R(0.0) ? (w_next - w_free) * denominator / q : GS_R(0.0);
-        t_f = push + coulomb - r->driven_inertia * a * dw / h - m->mu_follower * a * w_next;
+    gs_real drive = in->base_torque;
+    if (r->ripple) {
+        /* at the start angle: with the angle advanced by the end speed this is
+         * symplectic Euler, so the ripple's potential energy does not drift */
+        drive -= ripple_torque(r, st->base_angle);
     }
+    const geared_base_end e = geared_base_step(r, ctx, h, st->base_speed, st->block.follower_torque, drive,
+                                               GS_R(0.0), push);
+    const gs_real w_next = e.w;
+    const gs_real dw = e.dw;
+    const gs_real t_f = e.t_f;
     const gs_real w_f = a * w_next;
     const gs_real tau_mesh = gs_mesh_loss_torque(m, ctx, t_f, w_f);
     const gs_real tau_b = m->mu_base * w_next + a * (tau_mesh - t_f);
@@ -361,6 +605,70 @@ static void rigid_torque_driven(const rig_consts_ *r, gs_rig_state *st, const gs
     out->mesh_loss_power = tau_mesh * w_f;
     out->loss_power = out->mesh_loss_power + m->mu_base * w_next * w_next + m->mu_follower * w_f * w_f;
     out->port_power = tau_b * w_next + tau_f * w_f;
+}
+
+/* The compliant shaft (speed-driven base, rigid mesh): the drive turns at
+ * the input speed, ramped linearly from the last sample over the step; a
+ * spring k and damper c carry its torque to the base gear (J_B), which turns
+ * the driven side through the rigid mesh. Per sub-step h the shaft follows
+ * the implicit midpoint rule, with phi the twist (drive minus gear angle):
+ *   phi' = phi + h*(w_d - (w + w')/2),  tau_s = k*(phi + phi')/2 + c*(w_d - (w + w')/2),
+ * which is tau_s = k*phi + g*(w_d - w/2) - (g/2)*w' with g = k*h/2 + c: an
+ * explicit torque and an implicit slope g/2 for geared_base_step. The rule
+ * keeps the undamped shaft's energy exactly and is stable at any k*h^2/J. */
+static void compliant_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
+                           gs_real w_d_start, gs_rig_output *out)
+{
+    const gs_mesh_ *m = &r->mesh;
+    const gs_real a = m->inv_ratio;
+    const gs_real h = r->compliance_h;
+    const gs_real g = r->compliance_gain;
+    const gs_real push = in->load + r->load_offset;
+    const gs_real w_f_start = st->follower_speed;
+    gs_real sum_shaft = GS_R(0.0), sum_tau_b = GS_R(0.0), sum_tau_f = GS_R(0.0);
+    gs_real sum_mesh = GS_R(0.0), sum_loss = GS_R(0.0), sum_port = GS_R(0.0);
+    for (int k = 0; k < r->compliance_substeps; ++k) {
+        const gs_real w = st->base_speed;
+        const gs_real phi = st->shaft_twist;
+        /* the ramped drive speed at the sub-step's middle: its mean over the sub-step */
+        const gs_real w_d =
+            w_d_start + (in->base_speed - w_d_start) * (((gs_real)k + GS_R(0.5)) * r->inv_compliance_substeps);
+        gs_real drive = r->stiffness * phi + g * (w_d - GS_R(0.5) * w);
+        if (r->ripple) {
+            /* at the mid angle the start speed predicts: with the angle
+             * advanced by the mean speed the map stays area-preserving */
+            drive -= ripple_torque(r, st->base_angle + GS_R(0.5) * h * w);
+        }
+        const geared_base_end e = geared_base_step(r, ctx, h, w, st->block.follower_torque, drive, GS_R(0.5) * g, push);
+        const gs_real w_mid = GS_R(0.5) * (w + e.w);
+        const gs_real phi_end = phi + h * (w_d - w_mid);
+        const gs_real tau_shaft = GS_R(0.5) * r->stiffness * (phi + phi_end) + r->shaft_damping * (w_d - w_mid);
+        const gs_real w_f = a * e.w;
+        const gs_real tau_mesh = gs_mesh_loss_torque(m, ctx, e.t_f, w_f);
+        const gs_real tau_b = m->mu_base * e.w + a * (tau_mesh - e.t_f);
+        const gs_real tau_f = e.t_f + m->mu_follower * w_f;
+        st->block.follower_torque = e.t_f;
+        st->shaft_twist = phi_end;
+        st->base_speed = e.w;
+        st->follower_speed = w_f;
+        /* the angles with the mean speed, like the twist */
+        st->base_angle += h * w_mid;
+        st->follower_position += h * a * w_mid;
+        sum_shaft += tau_shaft;
+        sum_tau_b += tau_b;
+        sum_tau_f += tau_f;
+        sum_mesh += tau_mesh * w_f;
+        sum_loss += tau_mesh * w_f + m->mu_base * e.w * e.w + m->mu_follower * w_f * w_f;
+        sum_port += tau_b * e.w + tau_f * w_f;
+    }
+    const gs_real inv_n = r->inv_compliance_substeps;
+    out->base_torque = sum_shaft * inv_n;
+    out->base_port_torque = sum_tau_b * inv_n;
+    out->follower_port_torque = sum_tau_f * inv_n;
+    out->mesh_loss_power = sum_mesh * inv_n;
+    out->loss_power = sum_loss * inv_n;
+    out->port_power = sum_port * inv_n;
+    out->follower_acceleration = (st->follower_speed - w_f_start) / r->dt;
 }
 
 typedef struct {
@@ -487,7 +795,7 @@ static void backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
     const gs_real w_f_start = st->follower_speed;
     const gs_real push = in->load + r->load_offset;
     gs_real sum_tau_b = GS_R(0.0), sum_tau_f = GS_R(0.0), sum_mesh = GS_R(0.0), sum_loss = GS_R(0.0);
-    gs_real sum_port = GS_R(0.0), sum_f = GS_R(0.0);
+    gs_real sum_port = GS_R(0.0), sum_f = GS_R(0.0), sum_ripple = GS_R(0.0);
     for (int k = 0; k < n; ++k) {
         const gs_real w_f = st->follower_speed;
         /* The meshing loss on the last contact force (physics.md 4.6) acts as
@@ -500,11 +808,21 @@ static void backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
         const gs_real tau_law = gs_mesh_loss_from_tooth(m, ctx, t_f0, w_f, st->block.follower_torque);
         st->block.follower_torque = t_f0 + tau_law;
         const gs_real mesh_friction = tau_law * w_f > GS_R(0.0) ? gs_abs(tau_law) : GS_R(0.0);
-        const gs_real bound = r->load_coulomb + mesh_friction;
+        const gs_real bound = friction_level(r, w_f) + mesh_friction;
         /* the held speed ramps linearly from the last sample to this one */
-        const gs_real w_b_free =
+        gs_real w_b_free =
             speed_driven ? w_b_start + (in->base_speed - w_b_start) * ((gs_real)(k + 1) * r->inv_substeps)
                          : (r->base_inertia * st->base_speed + h * in->base_torque) * r->inv_base_inertia_sub;
+        if (r->ripple) {
+            /* a held speed: at the sub-step's mid angle; a torque-driven base:
+             * at the start angle (symplectic Euler, as in the rigid rig) */
+            const gs_real tau_ripple =
+                ripple_torque(r, speed_driven ? st->base_angle + GS_R(0.5) * h * w_b_free : st->base_angle);
+            sum_ripple += tau_ripple;
+            if (!speed_driven) {
+                w_b_free -= h * tau_ripple * r->inv_base_inertia_sub;
+            }
+        }
         gs_real friction;
         const substep_end e = substep_with_friction(r, st, w_b_free, r->driven_inertia * w_f + h * push, bound,
                                                     &friction);
@@ -536,6 +854,9 @@ static void backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
     out->base_port_torque = sum_tau_b * inv_n;
     out->base_torque = speed_driven ? out->base_port_torque + r->base_inertia * st->base_acceleration
                                        : in->base_torque;
+    if (r->ripple && speed_driven) {
+        out->base_torque += sum_ripple * inv_n;
+    }
     out->follower_port_torque = sum_tau_f * inv_n;
     out->mesh_loss_power = sum_mesh * inv_n;
     out->loss_power = sum_loss * inv_n;
@@ -550,6 +871,7 @@ void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *st, const gs_rig_inp
     const rig_consts_ *r = consts_of(consts);
     const gs_mesh_ *m = &r->mesh;
     const int from_input = r->temperature_source == GS_TEMPERATURE_FROM_INPUT;
+    gs_real w_drive_start = st->base_speed_sample;
     if (r->base_drive == GS_BASE_SPEED_DRIVEN) {
         const gs_real w_in = in->base_speed;
         if (!st->started) {
@@ -557,6 +879,7 @@ void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *st, const gs_rig_inp
             st->base_speed_sample = w_in;
             st->base_speed = w_in;
             st->follower_speed = m->inv_ratio * w_in;
+            w_drive_start = w_in;
         }
         const gs_real raw = (w_in - st->base_speed_sample) / r->dt;
         st->base_acceleration += r->accel_gain * (raw - st->base_acceleration);
@@ -568,6 +891,8 @@ void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *st, const gs_rig_inp
     out->contact_force = GS_R(0.0);
     if (m->backlash) {
         backlash_step(r, st, &ctx, in, out);
+    } else if (r->compliant) {
+        compliant_step(r, st, &ctx, in, w_drive_start, out);
     } else {
         if (r->base_drive == GS_BASE_SPEED_DRIVEN) {
             rigid_speed_driven(r, st, &ctx, in, out);
@@ -599,6 +924,8 @@ void gs_rig_get_info(const gs_rig_consts *consts, gs_rig_info *info)
     info->contact_h_omega_n = r->contact_h_omega_n;
     info->substeps_capped = r->substeps_capped;
     info->follower_per_base = r->mesh.inv_ratio;
+    info->compliance_substeps = r->compliance_substeps;
+    info->compliance_h_omega_n = r->compliance_h_omega_n;
 }
 
 void gs_rig_run(const gs_rig_consts *consts, gs_rig_state *state, size_t n, const gs_rig_input *in,

@@ -23,6 +23,11 @@ const char *gs_status_str(gs_status status)
     case GS_E_STEP_SIZE: return "step size must be finite and greater than zero";
     case GS_E_SUBSTEPS: return "contact sub-steps must lie in [0, GS_MAX_SUBSTEPS]";
     case GS_E_MAGNITUDE: return "value is so small that its reciprocal overflows";
+    case GS_E_BREAKAWAY:
+        return "breakaway friction must be 0 (none) or at least load_coulomb_friction";
+    case GS_E_COMBINATION:
+        return "not available with the other options: compliance needs a speed-driven base and "
+               "a rigid mesh (no backlash)";
     }
     return "unknown status";
 }

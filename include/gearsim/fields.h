@@ -62,6 +62,7 @@
     X(gs_real, follower_position, "rad", "m", "follower shaft angle or rack position")                     \
     X(gs_real, base_speed_sample, "rad/s", "rad/s", "speed-driven: the last base speed input")             \
     X(gs_real, base_acceleration, "rad/s^2", "rad/s^2", "speed-driven: the filtered base acceleration")    \
+    X(gs_real, shaft_twist, "rad", "rad", "compliance: drive angle minus base gear angle")                \
     X(int, started, "1", "1", "0 until the first step after init or reset")
 
 /* Expanders for the lists above. */

@@ -21,6 +21,14 @@
  * never reverses the motion; the meshing loss can likewise stop the follower
  * but not reverse it. In the speed-driven rigid rig the speed is imposed and
  * the Coulomb friction is tanh-smoothed on load_coulomb_speed_threshold.
+ *
+ * Three rig terms go beyond the seed blocks (physics.md 11), each off by
+ * default: a Stribeck hump on the driven side's friction (it then holds at
+ * rest up to the breakaway level), a compliant base shaft (spring and damper
+ * from the drive to the base gear, which turns with base_inertia; speed-driven
+ * base and rigid mesh only; base_torque is then the shaft torque and
+ * base_speed/base_angle the base gear's), and a torque ripple on the base
+ * side, periodic in the base angle per revolution and per tooth.
  */
 #ifndef GEARSIM_RIG_H
 #define GEARSIM_RIG_H
@@ -38,6 +46,8 @@ extern "C" {
 #define GS_MAX_SUBSTEPS 64
 /* The automatic sub-step count (contact_substeps = 0) stops here; see gs_rig_info. */
 #define GS_AUTO_SUBSTEPS_MAX 16
+/* Harmonics of the torque ripple, per revolution and per tooth mesh. */
+#define GS_RIPPLE_HARMONICS 2
 
 typedef enum {
     GS_BASE_SPEED_DRIVEN = 0,
@@ -70,6 +80,22 @@ typedef struct {
     gs_real accel_filter_time_constant_s;  /* speed-driven: first-order low-pass on the
                                               backward-difference base acceleration (>= 0; 0 = raw), default 0 */
     int contact_substeps;                  /* backlash: sub-steps per step, 1..GS_MAX_SUBSTEPS, 0 = choose at init */
+    /* Stribeck friction (physics.md 11): the driven side's friction level
+     * F(v) = F_C + (F_brk - F_C)*exp(-(v/v_S)^2); it holds at rest up to F_brk. */
+    gs_real load_breakaway_friction;       /* F_brk, N*m or N: 0 (default) = none, else >= load_coulomb_friction */
+    gs_real load_stribeck_speed;           /* v_S, rad/s or m/s (> 0 with a breakaway friction), default 0.01 */
+    /* Compliance: a torsional spring and damper between the drive and the
+     * base gear, which then turns on its own with base_inertia (> 0).
+     * Speed-driven base and rigid mesh only. */
+    gs_real compliance_stiffness_Nm_rad;   /* k (>= 0), 0 (default) = rigid shaft */
+    gs_real compliance_damping_Nm_s_rad;   /* c (>= 0), default 0 */
+    /* Torque ripple on the base side, the torque the base shaft must add:
+     * sum_i A_i*cos(i*theta_B + phi_i) + sum_j M_j*cos(j*Z*theta_B + psi_j), i, j = 1..GS_RIPPLE_HARMONICS */
+    gs_real ripple_revolution_amplitude_Nm[GS_RIPPLE_HARMONICS]; /* A_i (>= 0), default 0 */
+    gs_real ripple_revolution_phase_rad[GS_RIPPLE_HARMONICS];    /* phi_i (finite), default 0 */
+    gs_real ripple_mesh_amplitude_Nm[GS_RIPPLE_HARMONICS];       /* M_j (>= 0), default 0 */
+    gs_real ripple_mesh_phase_rad[GS_RIPPLE_HARMONICS];          /* psi_j (finite), default 0 */
+    int ripple_mesh_teeth;                 /* Z: teeth of the base gear or pinion (>= 1 when a M_j > 0), default 0 */
 } gs_rig_params;
 
 /* Per-step inputs and outputs (gearsim/fields.h: names, units, docs). All
@@ -112,9 +138,9 @@ GS_API extern const gs_field_info gs_rig_state_info[GS_RIG_STATE_FIELDS];
  * part of the ABI (GS_RIG_CONSTS_REALS reals; on targets that pack enums the
  * internal layout uses a few bytes less). */
 #ifdef GS_SINGLE_PRECISION
-#define GS_RIG_CONSTS_REALS 190
+#define GS_RIG_CONSTS_REALS 211
 #else
-#define GS_RIG_CONSTS_REALS 184
+#define GS_RIG_CONSTS_REALS 203
 #endif
 typedef struct {
     gs_real opaque_[GS_RIG_CONSTS_REALS];
@@ -135,6 +161,9 @@ typedef struct {
                                    set contact_substeps */
     gs_real follower_per_base;  /* follower speed per base speed of the rigid mesh:
                                    s/g (rad/s per rad/s) or s_R*r_P (m/s per rad/s) */
+    int compliance_substeps;    /* sub-steps of the compliant shaft (1 without compliance) */
+    gs_real compliance_h_omega_n; /* h*omega_c, omega_c = sqrt(k/J_eff): <= 0.2 unless capped
+                                     at GS_AUTO_SUBSTEPS_MAX (0 without compliance) */
 } gs_rig_info;
 
 /* Fills info for initialised constants. */

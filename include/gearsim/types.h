@@ -65,11 +65,14 @@ typedef enum {
     GS_E_TRANSITION_REGION = -13,   /* smooth model: 0 < d required */
     GS_E_STEP_SIZE = -14,           /* rig step dt must be > 0 and finite */
     GS_E_SUBSTEPS = -15,            /* contact sub-step count out of [0, GS_MAX_SUBSTEPS] */
-    GS_E_MAGNITUDE = -16            /* so small that its reciprocal overflows gs_real */
+    GS_E_MAGNITUDE = -16,           /* so small that its reciprocal overflows gs_real */
+    GS_E_BREAKAWAY = -17,           /* breakaway friction > 0 but below the Coulomb friction */
+    GS_E_COMBINATION = -18          /* not available with the other options (compliance:
+                                       speed-driven base and rigid mesh only) */
 } gs_status;
 
 /* The most negative status: every status lies in [GS_STATUS_MIN, GS_OK]. */
-#define GS_STATUS_MIN GS_E_MAGNITUDE
+#define GS_STATUS_MIN GS_E_COMBINATION
 
 /* Returns a static, human-readable description of a status (never NULL). */
 GS_API const char *gs_status_str(gs_status status);
