@@ -18,8 +18,9 @@ if [ ! -x "$py" ]; then
   scripts/setup.sh
   py=.venv/bin/python
 fi
+py_abs=$(cd "$(dirname "$py")" && pwd)/$(basename "$py")  # GEARSIM_PYTHON may be relative or absolute
 dir=build/hil-bench
 cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=OFF -DGEARSIM_BUILD_EXAMPLES=OFF \
-  -DGEARSIM_BUILD_BENCH=OFF -DGEARSIM_BUILD_HIL=ON -DGEARSIM_HIL_PYTHON="$PWD/$py" >/dev/null
+  -DGEARSIM_BUILD_BENCH=OFF -DGEARSIM_BUILD_HIL=ON -DGEARSIM_HIL_PYTHON="$py_abs" >/dev/null
 cmake --build "$dir" --target gearsim-hil -j "$(nproc 2>/dev/null || echo 2)" >/dev/null
-GEARSIM_HIL_RUNNER="$PWD/$dir/hil/gearsim-hil" exec "$py" bench/hil_bench.py "$@"
+GEARSIM_HIL_RUNNER="$PWD/$dir/hil/gearsim-hil" exec "$py_abs" bench/hil_bench.py "$@"
