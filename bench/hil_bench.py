@@ -86,7 +86,10 @@ def c_loop(
             ready, _, _ = select.select([proc.stdout], [], [], max(0.0, next_t - time.monotonic()))
             if ready:
                 received += (proc.stdout.read() or b"").count(b"\n")
-        proc.stdin.close()
+        try:
+            proc.stdin.close()
+        except BrokenPipeError:  # the runner exited first (refused or done): its stderr says why
+            pass
         proc.stdin = None
     except BaseException:
         proc.send_signal(signal.SIGINT)
