@@ -6,92 +6,79 @@ cantools reads the DBC (the one source of IDs, lengths, scaling, ranges, cycle
 times and signal roles, docs/hil.md); this script writes a C file defining
 ``const gs_hil_dbc gs_hil_dbc_<NAME>`` (gearsim/hil.h) for the runner's
 hand-written codec. It runs at build time (hil/CMakeLists.txt); the output
-lives in the build directory and is never checked in.
+lives in the build directory and is never checked in. The names it accepts
+are not listed here: roles, status flags, counters and modes come from
+bindings/python/gearsim/hil/dbc_rules.py (read by path; the Python codec
+imports it), the rig's output fields from include/gearsim/fields.h.
 
-The checks are those of the Python bridge's loader (unknown roles, a command
-role on two signals, frames mixing command and feedback roles, feedback
-without a cycle time, feedback ranges wider than their raw bits, counters
-that are not unsigned integers), plus what the C codec does not do: signals
-must be little-endian (Intel) integers in classic frames of at most 8 bytes.
+The checks are those of the Python bridge's loader: the signal and frame
+rules of dbc_rules.py (ranges wider than their raw bits, counters that are not
+unsigned integers, flags, frames mixing command and feedback roles, feedback
+without a cycle time), unknown roles and a command role on two signals; plus
+what the C codec does not do: signals must be little-endian (Intel) integers
+in classic frames of at most 8 bytes.
 Any failure prints one line naming the file, frame and signal, exit status 2.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import math
 import os
+import re
 import sys
 
+SOURCE_ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# The role, flag, counter and mode names and the signal and frame rules: the
+# same module the Python codec imports, loaded by path (it has no imports), so
+# that building the runner needs neither an installed gearsim nor its compiled
+# extension.
+DBC_RULES_PATH = os.path.join(SOURCE_ROOT, "bindings", "python", "gearsim", "hil", "dbc_rules.py")
+# The rig's output fields: the C core's one table of names.
+FIELDS_HEADER_PATH = os.path.join(SOURCE_ROOT, "include", "gearsim", "fields.h")
+
+
+def load_dbc_rules(path: str = DBC_RULES_PATH):
+    spec = importlib.util.spec_from_file_location("gearsim_hil_dbc_rules", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def rig_output_fields(path: str = FIELDS_HEADER_PATH) -> tuple[str, ...]:
+    """Field names of GS_RIG_OUTPUT_LIST in fields.h, in order: every entry
+    there is one line ``X(type, name, unit, unit, "description")``."""
+    with open(path, encoding="utf-8") as fh:
+        text = fh.read()
+    match = re.search(r"#define GS_RIG_OUTPUT_LIST\(X\)(.*?)\n\s*\n", text, re.S)
+    if match is None:
+        raise RuntimeError(f"{path}: no GS_RIG_OUTPUT_LIST")
+    names = tuple(re.findall(r"\bX\(\s*\w+\s*,\s*(\w+)\s*,", match.group(1)))
+    if not names:
+        raise RuntimeError(f"{path}: GS_RIG_OUTPUT_LIST has no fields")
+    return names
+
+
+RULES = load_dbc_rules()
+OUTPUT_FIELDS = rig_output_fields()
+STATUS_FLAGS = RULES.STATUS_FLAGS
+STATUS_COUNTS = RULES.STATUS_COUNTS
+DEFAULT_MODE_VALUES = RULES.DEFAULT_MODE_VALUES
+# Each command or input role is the C enum GS_HIL_ROLE_<ROLE>, e.g.
+# cmd.base_speed -> GS_HIL_ROLE_CMD_BASE_SPEED.
+COMMAND_ROLES = {r: "GS_HIL_ROLE_" + r.replace(".", "_").upper() for r in RULES.COMMAND_ROLES}
+INPUT_ROLES = {r: "GS_HIL_ROLE_" + r.replace(".", "_").upper() for r in RULES.INPUT_ROLES}
+# A mode name (any alias) -> its gs_hil_mode enum.
+MODE_NAMES = {alias: "GS_HIL_MODE_" + mode.upper() for alias, mode in RULES.MODE_ALIASES.items()}
+BLOCKS = {block: "GS_RIG_" + block.upper() for block in RULES.BLOCKS}
 ROLE_ATTRIBUTE = "GsRole"
 BLOCK_ATTRIBUTE = "GsBlock"
-COMMAND_ROLES = {
-    "cmd.base_speed": "GS_HIL_ROLE_CMD_BASE_SPEED",
-    "cmd.base_torque": "GS_HIL_ROLE_CMD_BASE_TORQUE",
-    "cmd.load": "GS_HIL_ROLE_CMD_LOAD",
-    "cmd.mode": "GS_HIL_ROLE_CMD_MODE",
-}
-INPUT_ROLES = {
-    "in.base_speed": "GS_HIL_ROLE_IN_BASE_SPEED",
-    "in.base_torque": "GS_HIL_ROLE_IN_BASE_TORQUE",
-    "in.load": "GS_HIL_ROLE_IN_LOAD",
-}
-OUTPUT_FIELDS = (
-    "base_torque",
-    "base_speed",
-    "base_angle",
-    "follower_speed",
-    "follower_position",
-    "base_port_torque",
-    "follower_port_torque",
-    "mesh_loss_power",
-    "loss_power",
-    "port_power",
-    "contact_energy",
-    "temperature",
-    "backlash_position",
-    "contact_force",
-    "follower_acceleration",
-)
-STATUS_FLAGS = (
-    "cmd_timeout",
-    "safe_state",
-    "drive_disabled",
-    "cmd_rejected",
-    "cmd_late",
-    "fb_saturated",
-    "overrun",
-    "tx_error",
-)
-STATUS_COUNTS = (
-    "rx_total",
-    "rx_used",
-    "rx_rejected",
-    "rx_late",
-    "rx_ignored",
-    "tx_frames",
-    "tx_errors",
-    "timeouts",
-    "recoveries",
-    "overruns",
-    "resyncs",
-    "saturations",
-    "periods",
-)
-MODE_NAMES = {
-    "disabled": "GS_HIL_MODE_DISABLED",
-    "disable": "GS_HIL_MODE_DISABLED",
-    "off": "GS_HIL_MODE_DISABLED",
-    "safe": "GS_HIL_MODE_DISABLED",
-    "speed": "GS_HIL_MODE_SPEED",
-    "torque": "GS_HIL_MODE_TORQUE",
-}
-DEFAULT_MODE_VALUES = {0: "disabled", 1: "speed", 2: "torque"}
-BLOCKS = {"simple_gear": "GS_RIG_SIMPLE_GEAR", "rack_pinion": "GS_RIG_RACK_PINION"}
 MAX_MODE_BITS = 8
 
 
-class TableError(Exception):
-    pass
+# The shared rules and the generator's own checks fail the same way: one line
+# naming frame and signal, exit status 2.
+TableError = RULES.RuleError
 
 
 def c_double(x: float) -> str:
@@ -132,14 +119,10 @@ def role_code(role: str) -> tuple[str, str]:
     raise TableError(f"unknown GsRole {role!r}")
 
 
-def raw_limits(length: int, signed: bool) -> tuple[int, int]:
-    if signed:
-        return -(1 << (length - 1)), (1 << (length - 1)) - 1
-    return 0, (1 << length) - 1
-
-
 def signal_entry(msg, sig, role: str | None, out: list[str]) -> str:
     where = f"{msg.name}.{sig.name}"
+    code, aux = ("GS_HIL_ROLE_NONE", "0") if role is None else role_code(role)
+    # what the hand-written C codec does not handle
     if sig.byte_order != "little_endian":
         raise TableError(
             f"{where}: big-endian (Motorola) signals are not supported by the C runner"
@@ -149,26 +132,17 @@ def signal_entry(msg, sig, role: str | None, out: list[str]) -> str:
     if sig.start + sig.length > 64:
         raise TableError(f"{where}: does not fit 64 bits")
     scale, offset = float(sig.scale), float(sig.offset)
-    lo_raw, hi_raw = raw_limits(sig.length, sig.is_signed)
-    a, b = lo_raw * scale + offset, hi_raw * scale + offset
-    lo_phys, hi_phys = min(a, b), max(a, b)
-    minimum = lo_phys if sig.minimum is None else float(sig.minimum)
-    maximum = hi_phys if sig.maximum is None else float(sig.maximum)
-    if minimum > maximum:
-        raise TableError(f"{where}: minimum {minimum} > maximum {maximum}")
-    tol = abs(scale) * 1e-6
-    if (
-        role is not None
-        and not role.startswith("cmd.")
-        and (minimum < lo_phys - tol or maximum > hi_phys + tol)
-    ):
-        raise TableError(f"{where}: range [{minimum}, {maximum}] does not fit its raw bits")
-    if role and (role.startswith("status.count.") or role == "status.counter"):
-        if sig.is_signed or scale != 1.0 or offset != 0.0:
-            raise TableError(f"{where}: a counter must be an unsigned integer signal")
-    if role and role.startswith("status.flag.") and (minimum > 0 or maximum < 1):
-        raise TableError(f"{where}: a flag must hold 0 and 1")
-    code, aux = ("GS_HIL_ROLE_NONE", "0") if role is None else role_code(role)
+    minimum, maximum = RULES.signal_range(
+        where,
+        role,
+        length=sig.length,
+        is_signed=bool(sig.is_signed),
+        is_float=False,
+        scale=scale,
+        offset=offset,
+        minimum=sig.minimum,
+        maximum=sig.maximum,
+    )
     modes = "NULL"
     mode_choices = 0
     if role == "cmd.mode":
@@ -177,6 +151,7 @@ def signal_entry(msg, sig, role: str | None, out: list[str]) -> str:
         names = {int(k): str(v) for k, v in sig.choices.items()} if sig.choices else None
         mode_choices = 1 if names else 0
         table = []
+        lo_raw, hi_raw = RULES.raw_limits(sig.length, sig.is_signed)
         for raw in range(lo_raw, hi_raw + 1):
             # the Python bridge looks the mode up by int(physical value)
             value = int(raw * scale + offset)
@@ -194,22 +169,27 @@ def signal_entry(msg, sig, role: str | None, out: list[str]) -> str:
     )
 
 
-def frame_kind(msg, roles: list[str]) -> str:
-    is_cmd = any(r.startswith("cmd.") for r in roles)
-    is_fb = any(not r.startswith("cmd.") for r in roles)
-    if is_cmd and is_fb:
-        raise TableError(f"{msg.name} mixes command and feedback roles")
-    if (is_cmd or is_fb) and msg.is_multiplexed():
-        raise TableError(
-            f"{msg.name}: multiplexed frames are not supported for commands or feedback"
+FRAME_KINDS = {
+    "command": "GS_HIL_FRAME_COMMAND",
+    "feedback": "GS_HIL_FRAME_FEEDBACK",
+    "other": "GS_HIL_FRAME_OTHER",
+}
+
+
+def names_agree_checks() -> list[str]:
+    """Compile-time checks that the C enums of gearsim/hil.h list exactly the
+    flags and counters of dbc_rules.py, in the same order: a file-scope
+    array type whose size is -1 (an error) when they differ."""
+    checks = []
+    for kind, names in (("FLAG", STATUS_FLAGS), ("COUNT", STATUS_COUNTS)):
+        terms = [f"GS_HIL_{kind}_{n.upper()} == {i}" for i, n in enumerate(names)]
+        terms.append(f"GS_HIL_{kind}S == {len(names)}")
+        condition = " && ".join(terms)
+        checks.append(
+            f"typedef char gs_hil_{kind.lower()}_names_agree_with_dbc_rules_py"
+            f"[({condition}) ? 1 : -1];"
         )
-    return (
-        "GS_HIL_FRAME_COMMAND"
-        if is_cmd
-        else "GS_HIL_FRAME_FEEDBACK"
-        if is_fb
-        else "GS_HIL_FRAME_OTHER"
-    )
+    return checks
 
 
 def generate(path: str, name: str) -> str:
@@ -227,10 +207,15 @@ def generate(path: str, name: str) -> str:
         if msg.length > 8 or msg.is_fd:
             raise TableError(f"{msg.name}: the C runner handles classic CAN frames of <= 8 bytes")
         roles = [r for r in (role_of(s) for s in msg.signals) if r]
-        kind = frame_kind(msg, roles)
+        kind = FRAME_KINDS[
+            RULES.frame_kind(
+                msg.name,
+                roles,
+                has_cycle_time=bool(msg.cycle_time),
+                is_multiplexed=msg.is_multiplexed(),
+            )
+        ]
         cycle_ms = int(msg.cycle_time or 0)
-        if kind == "GS_HIL_FRAME_FEEDBACK" and not cycle_ms:
-            raise TableError(f"feedback frame {msg.name} has no GenMsgCycleTime")
         rows = []
         for sig in msg.signals:
             role = role_of(sig)
@@ -264,6 +249,8 @@ def generate(path: str, name: str) -> str:
         "#include <math.h>",
         "#include <stddef.h>",
         '#include "gearsim/hil.h"',
+        "",
+        *names_agree_checks(),
         "",
         *head,
         "",

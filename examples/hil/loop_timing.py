@@ -21,6 +21,7 @@ import can
 
 import gearsim
 from gearsim.hil import Bridge, RigDbc
+from gearsim.hil.codec import STATUS_COUNTS
 
 
 def main() -> None:
@@ -66,20 +67,8 @@ def main() -> None:
         "spin_s": args.spin,
         "loop": stats.summary(),
         "feedback_received_by_host": received[0],
-        "counters": {
-            k: summary[k]
-            for k in (
-                "rx_total",
-                "rx_used",
-                "rx_rejected",
-                "rx_late",
-                "rx_ignored",
-                "tx_frames",
-                "overruns",
-                "resyncs",
-                "timeouts",
-            )
-        },
+        # every counter a status frame can carry, by the codec's one list of names
+        "counters": {k: summary[k] for k in STATUS_COUNTS},
         "load_average": os.getloadavg(),
     }
     print(json.dumps(out, indent=2))

@@ -295,8 +295,13 @@ static void print_summary(const options *o, const run_report *r)
             (unsigned long long)c->steps, gs_hil_pending(b),
             exact((double)c->count[GS_HIL_COUNT_PERIODS] * b->period_s, t1, sizeof t1), exact(b->period_s, t2, sizeof t2),
             o->substeps, exact((double)b->timeout_periods * b->period_s, t3, sizeof t3));
-    fprintf(out, "\"state\": {\"cmd_timeout\": %s, \"safe_state\": %s, \"drive_disabled\": %s}, ",
-            b->flag_state[0] ? "true" : "false", b->flag_state[1] ? "true" : "false", b->flag_state[2] ? "true" : "false");
+    /* the state flags are the first three of gs_hil_flag (b->flag_state) */
+    fputs("\"state\": {", out);
+    for (int k = GS_HIL_FLAG_CMD_TIMEOUT; k <= GS_HIL_FLAG_DRIVE_DISABLED; ++k) {
+        fprintf(out, "%s\"%s\": %s", k > GS_HIL_FLAG_CMD_TIMEOUT ? ", " : "", gs_hil_flag_name((gs_hil_flag)k),
+                b->flag_state[k] ? "true" : "false");
+    }
+    fputs("}, ", out);
     fprintf(out, "\"frames_in\": %llu, \"frames_out\": %llu, \"malformed_lines\": %llu, \"write_errors\": %llu, "
                  "\"wall_time\": %.6f, \"cpu_time\": %.6f",
             (unsigned long long)r->frames_in, (unsigned long long)r->frames_out, (unsigned long long)r->malformed_lines,

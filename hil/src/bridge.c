@@ -11,31 +11,11 @@
 
 #include "gearsim/hil.h"
 
-static const char *const reason_names[GS_HIL_REASONS] = {
-    "pending",
-    "rejected.unknown_id",
-    "rejected.bad_length",
-    "rejected.undecodable",
-    "rejected.out_of_range",
-    "rejected.mode_mismatch",
-    "late.superseded",
-    "late.out_of_order",
-    "late.after_stop",
-    "ignored.feedback_id",
-    "ignored.other_dbc_frame",
-    "ignored.error_frame",
-    "ignored.remote_frame",
-};
-
-static const char *const count_names[GS_HIL_COUNTS] = {
-    "rx_total",  "rx_used",    "rx_rejected", "rx_late", "rx_ignored",  "tx_frames", "tx_errors",
-    "timeouts", "recoveries", "overruns",    "resyncs", "saturations", "periods",
-};
-
-static const char *const flag_names[GS_HIL_FLAGS] = {
-    "cmd_timeout", "safe_state", "drive_disabled", "cmd_rejected",
-    "cmd_late",    "fb_saturated", "overrun",     "tx_error",
-};
+#define GS_HIL_NAME_STRING_(suffix, name) #name,
+#define GS_HIL_REASON_STRING_(suffix, name) name,
+static const char *const reason_names[GS_HIL_REASONS] = {GS_HIL_REASON_LIST(GS_HIL_REASON_STRING_)};
+static const char *const count_names[GS_HIL_COUNTS] = {GS_HIL_COUNT_LIST(GS_HIL_NAME_STRING_)};
+static const char *const flag_names[GS_HIL_FLAGS] = {GS_HIL_FLAG_LIST(GS_HIL_NAME_STRING_)};
 
 /* The latched flags and the counters whose growth sets them. */
 static const gs_hil_count latched_counts[5] = {
@@ -83,31 +63,6 @@ static gs_hil_status fail(gs_hil_error *err, const char *parameter, const char *
         snprintf(err->message, sizeof err->message, "%s", message);
     }
     return GS_HIL_E_CONFIG;
-}
-
-static int command_role_slot(gs_hil_role role)
-{
-    switch (role) {
-    case GS_HIL_ROLE_CMD_BASE_SPEED:
-        return GS_HIL_CMD_BASE_SPEED;
-    case GS_HIL_ROLE_CMD_BASE_TORQUE:
-        return GS_HIL_CMD_BASE_TORQUE;
-    case GS_HIL_ROLE_CMD_LOAD:
-        return GS_HIL_CMD_LOAD;
-    case GS_HIL_ROLE_CMD_MODE:
-        return GS_HIL_CMD_MODE;
-    case GS_HIL_ROLE_NONE:
-    case GS_HIL_ROLE_OUT:
-    case GS_HIL_ROLE_OUT_FOLLOWER_ANGLE:
-    case GS_HIL_ROLE_IN_BASE_SPEED:
-    case GS_HIL_ROLE_IN_BASE_TORQUE:
-    case GS_HIL_ROLE_IN_LOAD:
-    case GS_HIL_ROLE_STATUS_COUNTER:
-    case GS_HIL_ROLE_STATUS_FLAG:
-    case GS_HIL_ROLE_STATUS_COUNT:
-    default:
-        return -1;
-    }
 }
 
 /* Feedback frames in sending order: the others by ID, then the status frames
@@ -171,7 +126,7 @@ static gs_hil_status index_commands(gs_hil_bridge *b, gs_hil_error *err)
         }
         b->command_index[i] = b->command_count++;
         for (unsigned s = 0; s < f->signal_count; ++s) {
-            int slot = command_role_slot(f->signals[s].role);
+            int slot = gs_hil_role_command_index(f->signals[s].role);
             if (slot >= 0) {
                 b->has_role[slot] = 1;
             }

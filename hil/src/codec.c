@@ -82,6 +82,31 @@ int gs_hil_put_value(const gs_hil_signal *sig, double value, uint8_t *data)
     return clamped;
 }
 
+int gs_hil_role_command_index(gs_hil_role role)
+{
+    switch (role) {
+    case GS_HIL_ROLE_CMD_BASE_SPEED:
+        return GS_HIL_CMD_BASE_SPEED;
+    case GS_HIL_ROLE_CMD_BASE_TORQUE:
+        return GS_HIL_CMD_BASE_TORQUE;
+    case GS_HIL_ROLE_CMD_LOAD:
+        return GS_HIL_CMD_LOAD;
+    case GS_HIL_ROLE_CMD_MODE:
+        return GS_HIL_CMD_MODE;
+    case GS_HIL_ROLE_NONE:
+    case GS_HIL_ROLE_OUT:
+    case GS_HIL_ROLE_OUT_FOLLOWER_ANGLE:
+    case GS_HIL_ROLE_IN_BASE_SPEED:
+    case GS_HIL_ROLE_IN_BASE_TORQUE:
+    case GS_HIL_ROLE_IN_LOAD:
+    case GS_HIL_ROLE_STATUS_COUNTER:
+    case GS_HIL_ROLE_STATUS_FLAG:
+    case GS_HIL_ROLE_STATUS_COUNT:
+    default:
+        return -1;
+    }
+}
+
 gs_hil_reason gs_hil_decode_command(const gs_hil_frame_spec *spec, const uint8_t *data, unsigned length,
                                     gs_hil_command *cmd)
 {
@@ -110,37 +135,16 @@ gs_hil_reason gs_hil_decode_command(const gs_hil_frame_spec *spec, const uint8_t
         if (v < sig->minimum - tol || v > sig->maximum + tol) {
             return GS_HIL_REJECTED_OUT_OF_RANGE;
         }
-        switch (sig->role) {
-        case GS_HIL_ROLE_CMD_MODE:
+        int slot = gs_hil_role_command_index(sig->role);
+        if (slot == GS_HIL_CMD_MODE) {
             if (mode < 0) {
                 return GS_HIL_REJECTED_UNDECODABLE;
             }
-            cmd->value[GS_HIL_CMD_MODE] = (double)mode;
-            cmd->present[GS_HIL_CMD_MODE] = 1;
-            break;
-        case GS_HIL_ROLE_CMD_BASE_SPEED:
-            cmd->value[GS_HIL_CMD_BASE_SPEED] = v;
-            cmd->present[GS_HIL_CMD_BASE_SPEED] = 1;
-            break;
-        case GS_HIL_ROLE_CMD_BASE_TORQUE:
-            cmd->value[GS_HIL_CMD_BASE_TORQUE] = v;
-            cmd->present[GS_HIL_CMD_BASE_TORQUE] = 1;
-            break;
-        case GS_HIL_ROLE_CMD_LOAD:
-            cmd->value[GS_HIL_CMD_LOAD] = v;
-            cmd->present[GS_HIL_CMD_LOAD] = 1;
-            break;
-        case GS_HIL_ROLE_NONE:
-        case GS_HIL_ROLE_OUT:
-        case GS_HIL_ROLE_OUT_FOLLOWER_ANGLE:
-        case GS_HIL_ROLE_IN_BASE_SPEED:
-        case GS_HIL_ROLE_IN_BASE_TORQUE:
-        case GS_HIL_ROLE_IN_LOAD:
-        case GS_HIL_ROLE_STATUS_COUNTER:
-        case GS_HIL_ROLE_STATUS_FLAG:
-        case GS_HIL_ROLE_STATUS_COUNT:
-        default:
-            break;
+            v = (double)mode;
+        }
+        if (slot >= 0) {
+            cmd->value[slot] = v;
+            cmd->present[slot] = 1;
         }
     }
     return GS_HIL_PENDING;

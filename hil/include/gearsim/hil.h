@@ -54,53 +54,65 @@ enum { GS_HIL_CMD_BASE_SPEED = 0, GS_HIL_CMD_BASE_TORQUE, GS_HIL_CMD_LOAD, GS_HI
 
 typedef enum { GS_HIL_MODE_DISABLED = 0, GS_HIL_MODE_SPEED = 1, GS_HIL_MODE_TORQUE = 2 } gs_hil_mode;
 
-typedef enum {
-    GS_HIL_FLAG_CMD_TIMEOUT = 0,
-    GS_HIL_FLAG_SAFE_STATE,
-    GS_HIL_FLAG_DRIVE_DISABLED,
-    GS_HIL_FLAG_CMD_REJECTED, /* latched: since the previous frame of the same ID */
-    GS_HIL_FLAG_CMD_LATE,
-    GS_HIL_FLAG_FB_SATURATED,
-    GS_HIL_FLAG_OVERRUN,
-    GS_HIL_FLAG_TX_ERROR,
-    GS_HIL_FLAGS
-} gs_hil_flag;
+/*
+ * Flags, counters and reasons are each listed once, as X(ENUM_SUFFIX, name):
+ * the enums below and the name strings of bridge.c are expanded from these
+ * lists. The Python side (codec and the table generator) takes its flag and
+ * counter names from bindings/python/gearsim/hil/dbc_rules.py; each
+ * generated table file checks at compile time that both name the same flags
+ * and counters in the same order.
+ */
+#define GS_HIL_FLAG_LIST(X)                                                                         \
+    X(CMD_TIMEOUT, cmd_timeout)                                                                     \
+    X(SAFE_STATE, safe_state)                                                                       \
+    X(DRIVE_DISABLED, drive_disabled)                                                               \
+    X(CMD_REJECTED, cmd_rejected)   /* latched: since the previous frame of the same ID */          \
+    X(CMD_LATE, cmd_late)                                                                           \
+    X(FB_SATURATED, fb_saturated)                                                                   \
+    X(OVERRUN, overrun)                                                                             \
+    X(TX_ERROR, tx_error)
 
 /* The counters, in the order of gs_hil_counters.count. */
-typedef enum {
-    GS_HIL_COUNT_RX_TOTAL = 0,
-    GS_HIL_COUNT_RX_USED,
-    GS_HIL_COUNT_RX_REJECTED,
-    GS_HIL_COUNT_RX_LATE,
-    GS_HIL_COUNT_RX_IGNORED,
-    GS_HIL_COUNT_TX_FRAMES,
-    GS_HIL_COUNT_TX_ERRORS,
-    GS_HIL_COUNT_TIMEOUTS,   /* entries into the command timeout after commands had arrived */
-    GS_HIL_COUNT_RECOVERIES, /* exits from it */
-    GS_HIL_COUNT_OVERRUNS,   /* paced run: periods that started more than a period late */
-    GS_HIL_COUNT_RESYNCS,    /* paced run: schedule moved to now */
-    GS_HIL_COUNT_SATURATIONS,
-    GS_HIL_COUNT_PERIODS,
-    GS_HIL_COUNTS
-} gs_hil_count;
+#define GS_HIL_COUNT_LIST(X)                                                                        \
+    X(RX_TOTAL, rx_total)                                                                           \
+    X(RX_USED, rx_used)                                                                             \
+    X(RX_REJECTED, rx_rejected)                                                                     \
+    X(RX_LATE, rx_late)                                                                             \
+    X(RX_IGNORED, rx_ignored)                                                                       \
+    X(TX_FRAMES, tx_frames)                                                                         \
+    X(TX_ERRORS, tx_errors)                                                                         \
+    X(TIMEOUTS, timeouts)           /* entries into the command timeout after commands came */      \
+    X(RECOVERIES, recoveries)       /* exits from it */                                             \
+    X(OVERRUNS, overruns)           /* paced run: periods that started more than a period late */   \
+    X(RESYNCS, resyncs)             /* paced run: schedule moved to now */                          \
+    X(SATURATIONS, saturations)                                                                     \
+    X(PERIODS, periods)
 
-/* What became of a received frame: its class and reason. */
-typedef enum {
-    GS_HIL_PENDING = 0, /* a valid command, applied by the next period */
-    GS_HIL_REJECTED_UNKNOWN_ID,
-    GS_HIL_REJECTED_BAD_LENGTH,
-    GS_HIL_REJECTED_UNDECODABLE,
-    GS_HIL_REJECTED_OUT_OF_RANGE,
-    GS_HIL_REJECTED_MODE_MISMATCH,
-    GS_HIL_LATE_SUPERSEDED, /* counted for the older command a newer one replaced */
-    GS_HIL_LATE_OUT_OF_ORDER,
-    GS_HIL_LATE_AFTER_STOP,
-    GS_HIL_IGNORED_FEEDBACK_ID,
-    GS_HIL_IGNORED_OTHER_DBC_FRAME,
-    GS_HIL_IGNORED_ERROR_FRAME,
-    GS_HIL_IGNORED_REMOTE_FRAME,
-    GS_HIL_REASONS
-} gs_hil_reason;
+/* What became of a received frame: its class and reason (the Python bridge's
+ * reason keys). PENDING is a valid command, applied by the next period;
+ * LATE_SUPERSEDED is counted for the older command a newer one replaced. */
+#define GS_HIL_REASON_LIST(X)                                                                       \
+    X(PENDING, "pending")                                                                           \
+    X(REJECTED_UNKNOWN_ID, "rejected.unknown_id")                                                   \
+    X(REJECTED_BAD_LENGTH, "rejected.bad_length")                                                   \
+    X(REJECTED_UNDECODABLE, "rejected.undecodable")                                                 \
+    X(REJECTED_OUT_OF_RANGE, "rejected.out_of_range")                                               \
+    X(REJECTED_MODE_MISMATCH, "rejected.mode_mismatch")                                             \
+    X(LATE_SUPERSEDED, "late.superseded")                                                           \
+    X(LATE_OUT_OF_ORDER, "late.out_of_order")                                                       \
+    X(LATE_AFTER_STOP, "late.after_stop")                                                           \
+    X(IGNORED_FEEDBACK_ID, "ignored.feedback_id")                                                   \
+    X(IGNORED_OTHER_DBC_FRAME, "ignored.other_dbc_frame")                                           \
+    X(IGNORED_ERROR_FRAME, "ignored.error_frame")                                                   \
+    X(IGNORED_REMOTE_FRAME, "ignored.remote_frame")
+
+#define GS_HIL_FLAG_ENUM_(suffix, name) GS_HIL_FLAG_##suffix,
+#define GS_HIL_COUNT_ENUM_(suffix, name) GS_HIL_COUNT_##suffix,
+#define GS_HIL_REASON_ENUM_(suffix, name) GS_HIL_##suffix,
+
+typedef enum { GS_HIL_FLAG_LIST(GS_HIL_FLAG_ENUM_) GS_HIL_FLAGS } gs_hil_flag;
+typedef enum { GS_HIL_COUNT_LIST(GS_HIL_COUNT_ENUM_) GS_HIL_COUNTS } gs_hil_count;
+typedef enum { GS_HIL_REASON_LIST(GS_HIL_REASON_ENUM_) GS_HIL_REASONS } gs_hil_reason;
 
 /* "rejected.unknown_id", ... (the Python bridge's reason keys); "pending". */
 const char *gs_hil_reason_name(gs_hil_reason reason);
@@ -163,6 +175,10 @@ typedef struct {
     double value[GS_HIL_CMD_ROLES];
     int present[GS_HIL_CMD_ROLES];
 } gs_hil_command;
+
+/* The slot of a command role in gs_hil_command.value (GS_HIL_CMD_*), -1 for
+ * any other role. */
+int gs_hil_role_command_index(gs_hil_role role);
 
 /* Decode and range-check a command frame: GS_HIL_PENDING with *cmd filled,
  * or GS_HIL_REJECTED_BAD_LENGTH / _UNDECODABLE / _OUT_OF_RANGE. The first

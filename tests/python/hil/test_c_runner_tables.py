@@ -5,6 +5,7 @@ built runner."""
 
 from __future__ import annotations
 
+import importlib.util
 import subprocess
 import sys
 from pathlib import Path
@@ -68,9 +69,19 @@ def test_shipped_dbc_tables(tmp_path: Path) -> None:
             "GearFbBase.BaseSpeed: unknown GsRole 'out.warp_speed'",
         ),
         (
+            'SG_ 528 Overrun "status.flag.overrun"',
+            'SG_ 528 Overrun "status.flag.overran"',
+            "GearStatus.Overrun: unknown GsRole 'status.flag.overran'",
+        ),
+        (
+            'SG_ 529 Timeouts "status.count.timeouts"',
+            'SG_ 529 Timeouts "status.count.timeout"',
+            "unknown GsRole 'status.count.timeout'",
+        ),
+        (
             "SG_ Temperature : 0|16@1+ (0.01,0) [0|655.35]",
             "SG_ Temperature : 0|16@1+ (0.01,0) [0|900]",
-            "GearFbThermal.Temperature: range [0.0, 900.0] does not fit its raw bits",
+            "GearFbThermal.Temperature: range [0.0, 900.0] does not fit 16 unsigned bits",
         ),
     ],
 )
@@ -87,3 +98,27 @@ def test_refused_dbc_is_one_line_and_exit_2(
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and expected in lines[0], res.stderr
     assert not out.exists()
+
+
+def test_output_fields_come_from_the_c_core_table(tmp_path: Path) -> None:
+    """The generator reads the rig's outputs from include/gearsim/fields.h; the
+    compiled core exports the same X-macro list as gs_rig_output_info. Both
+    readings must give the 15 fields of docs/c-api.md, in struct order."""
+    rig = pytest.importorskip("gearsim.rig")
+    spec = importlib.util.spec_from_file_location("dbc_tables_under_test", TABLES)
+    tables = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tables)
+    fields = tables.rig_output_fields()
+    assert len(fields) == 15
+    assert fields[0] == "base_torque" and fields[-1] == "follower_acceleration"
+    assert fields == rig.OUTPUT_NAMES
+    # an output the shipped DBC does not carry is accepted and indexed by name
+    text = GEAR_DBC.read_text().replace(
+        'SG_ 512 BaseSpeed "out.base_speed"', 'SG_ 512 BaseSpeed "out.contact_energy"'
+    )
+    dbc = tmp_path / "energy.dbc"
+    dbc.write_text(text)
+    out = tmp_path / "energy.c"
+    res = generate(dbc, out)
+    assert res.returncode == 0, res.stderr
+    assert "GS_HIL_ROLE_OUT, GS_HIL_OUTPUT_INDEX(contact_energy)" in out.read_text()

@@ -78,6 +78,13 @@ def _show(path: Any) -> str:
 
 
 # -- parser -------------------------------------------------------------------------
+def _timing_options(p: argparse.ArgumentParser, period_help: str, substeps_help: str) -> None:
+    """--period (s) and --substeps: the bridge's timing, the same defaults for
+    a run and for reading what a run recorded."""
+    p.add_argument("--period", type=float, default=1e-3, metavar="S", help=period_help)
+    p.add_argument("--substeps", type=int, default=1, metavar="N", help=substeps_help)
+
+
 def _model_options(p: argparse.ArgumentParser, model_required: bool = True) -> None:
     p.add_argument(
         "--model",
@@ -90,19 +97,10 @@ def _model_options(p: argparse.ArgumentParser, model_required: bool = True) -> N
         metavar="FILE",
         help="DBC of the rig (default: the one shipped for the model's block)",
     )
-    p.add_argument(
-        "--period",
-        type=float,
-        default=1e-3,
-        metavar="S",
-        help="frame period in seconds (default 0.001: 1 kHz)",
-    )
-    p.add_argument(
-        "--substeps",
-        type=int,
-        default=1,
-        metavar="N",
-        help="rig steps per frame period (default 1; rig dt = period / N)",
+    _timing_options(
+        p,
+        period_help="frame period in seconds (default 0.001: 1 kHz)",
+        substeps_help="rig steps per frame period (default 1; rig dt = period / N)",
     )
     p.add_argument(
         "--timeout",
@@ -265,19 +263,10 @@ def _fill(parser: argparse.ArgumentParser) -> None:
         metavar="S",
         help="grid step in seconds (default: longest cycle time of the frames used)",
     )
-    p.add_argument(
-        "--period",
-        type=float,
-        default=1e-3,
-        metavar="S",
-        help="frame period of the run that made the log (default 0.001, as hil run)",
-    )
-    p.add_argument(
-        "--substeps",
-        type=int,
-        default=1,
-        metavar="N",
-        help="rig steps per period of that run (default 1, as hil run)",
+    _timing_options(
+        p,
+        period_help="frame period of the run that made the log (default 0.001, as hil run)",
+        substeps_help="rig steps per period of that run (default 1, as hil run)",
     )
     p.add_argument(
         "--source",

@@ -38,6 +38,19 @@ import cantools
 
 from ..errors import GearsimError
 from ..rig import OUTPUT_NAMES
+from .dbc_rules import (
+    BLOCKS,
+    COMMAND_ROLES,
+    DEFAULT_MODE_VALUES,
+    INPUT_ROLES,
+    MODE_ALIASES,
+    MODES,
+    STATUS_COUNTS,
+    STATUS_FLAGS,
+    RuleError,
+    frame_kind,
+    signal_range,
+)
 
 __all__ = [
     "DbcError",
@@ -57,53 +70,13 @@ __all__ = [
 ROLE_ATTRIBUTE = "GsRole"
 BLOCK_ATTRIBUTE = "GsBlock"
 
-COMMAND_ROLES: tuple[str, ...] = ("cmd.base_speed", "cmd.base_torque", "cmd.load", "cmd.mode")
-INPUT_ROLES: tuple[str, ...] = ("in.base_speed", "in.base_torque", "in.load")
 #: RigResult fields (docs/python-api.md), usable as ``out.<field>``: the rig's
 #: own list, so that the two cannot drift apart.
 OUTPUT_FIELDS: tuple[str, ...] = OUTPUT_NAMES
 #: out.follower_angle: follower_position modulo 2*pi, in [0, 2*pi) (gear rig).
 DERIVED_OUTPUTS: tuple[str, ...] = ("follower_angle",)
-#: Status flags. The first three are the state during the frame period that
-#: ended with the status frame; the others are latched: set when the event
-#: happened at least once since the previous status frame of the same ID.
-STATUS_FLAGS: tuple[str, ...] = (
-    "cmd_timeout",
-    "safe_state",
-    "drive_disabled",
-    "cmd_rejected",
-    "cmd_late",
-    "fb_saturated",
-    "overrun",
-    "tx_error",
-)
-#: Counters (Counters attributes), encoded modulo 2**bits.
-STATUS_COUNTS: tuple[str, ...] = (
-    "rx_total",
-    "rx_used",
-    "rx_rejected",
-    "rx_late",
-    "rx_ignored",
-    "tx_frames",
-    "tx_errors",
-    "timeouts",
-    "recoveries",
-    "overruns",
-    "resyncs",
-    "saturations",
-    "periods",
-)
-MODES: tuple[str, ...] = ("disabled", "speed", "torque")
-_MODE_NAMES = {
-    "disabled": "disabled",
-    "disable": "disabled",
-    "off": "disabled",
-    "safe": "disabled",
-    "speed": "speed",
-    "torque": "torque",
-}
-_DEFAULT_MODE_VALUES = {0: "disabled", 1: "speed", 2: "torque"}
-BLOCKS = ("simple_gear", "rack_pinion")
+# The role, flag, counter and mode names and the signal and frame rules live
+# in dbc_rules, which the C runner's build step reads too.
 
 _SHIPPED = {"simple_gear": "gear_rig.dbc", "rack_pinion": "rack_rig.dbc"}
 _BLOCK_ALIASES = {
@@ -206,12 +179,6 @@ def _nearest_zero(s: SignalSpec) -> float:
     return min(max(0.0, s.minimum), s.maximum)
 
 
-def _raw_limits(length: int, signed: bool) -> tuple[int, int]:
-    if signed:
-        return -(1 << (length - 1)), (1 << (length - 1)) - 1
-    return 0, (1 << length) - 1
-
-
 class RigDbc:
     """A DBC loaded for the bridge (see the module docstring for the roles).
 
@@ -293,18 +260,16 @@ class RigDbc:
                 self._fail(f"{message.name}.{sig.name}: unknown GsRole {role!r}")
             signals.append(self._signal(message, sig, role))
         roles = [s.role for s in signals if s.role]
-        is_cmd = any(r.startswith("cmd.") for r in roles)
-        is_fb = any(not r.startswith("cmd.") for r in roles)
-        if is_cmd and is_fb:
-            self._fail(f"{message.name} mixes command and feedback roles")
-        kind = "command" if is_cmd else "feedback" if is_fb else "other"
-        cycle = message.cycle_time / 1000.0 if message.cycle_time else None
-        if kind == "feedback" and not cycle:
-            self._fail(f"feedback frame {message.name} has no GenMsgCycleTime")
-        if message.is_multiplexed() and kind != "other":
-            self._fail(
-                f"{message.name}: multiplexed frames are not supported for commands or feedback"
+        try:
+            kind = frame_kind(
+                message.name,
+                roles,
+                has_cycle_time=bool(message.cycle_time),
+                is_multiplexed=message.is_multiplexed(),
             )
+        except RuleError as exc:
+            self._fail(str(exc))
+        cycle = message.cycle_time / 1000.0 if message.cycle_time else None
         return FrameSpec(
             message.name,
             message.frame_id,
@@ -320,42 +285,28 @@ class RigDbc:
         scale = float(sig.scale)
         offset = float(sig.offset)
         is_float = bool(sig.is_float)
-        if is_float:
-            lo_phys, hi_phys = -math.inf, math.inf
-        else:
-            lo_raw, hi_raw = _raw_limits(sig.length, sig.is_signed)
-            a, b = lo_raw * scale + offset, hi_raw * scale + offset
-            lo_phys, hi_phys = min(a, b), max(a, b)
-        minimum = lo_phys if sig.minimum is None else float(sig.minimum)
-        maximum = hi_phys if sig.maximum is None else float(sig.maximum)
-        if minimum > maximum:
-            self._fail(f"{message.name}.{sig.name}: minimum {minimum} > maximum {maximum}")
         where = f"{message.name}.{sig.name}"
-        tol = abs(scale) * 1e-6
-        if (
-            role is not None
-            and not role.startswith("cmd.")
-            and (minimum < lo_phys - tol or maximum > hi_phys + tol)
-        ):
-            self._fail(
-                f"{where}: range [{minimum}, {maximum}] does not fit {sig.length} "
-                f"{'signed' if sig.is_signed else 'unsigned'} bits at scale {scale} "
-                f"([{lo_phys}, {hi_phys}]); values would wrap"
+        try:
+            minimum, maximum = signal_range(
+                where,
+                role,
+                length=sig.length,
+                is_signed=bool(sig.is_signed),
+                is_float=is_float,
+                scale=scale,
+                offset=offset,
+                minimum=sig.minimum,
+                maximum=sig.maximum,
             )
-        if role and (role.startswith("status.count.") or role == "status.counter"):
-            if is_float or sig.is_signed or scale != 1.0 or offset != 0.0:
-                self._fail(
-                    f"{where}: a counter must be an unsigned integer signal (scale 1, offset 0)"
-                )
-        if role and role.startswith("status.flag.") and (minimum > 0 or maximum < 1):
-            self._fail(f"{where}: a flag must hold 0 and 1")
+        except RuleError as exc:
+            self._fail(str(exc))
         choices = None
         if sig.choices:
             choices = {int(k): str(v) for k, v in sig.choices.items()}
         if role == "cmd.mode":
-            names = choices or _DEFAULT_MODE_VALUES
+            names = choices or DEFAULT_MODE_VALUES
             for raw, name in names.items():
-                if str(name).strip().lower() not in _MODE_NAMES:
+                if str(name).strip().lower() not in MODE_ALIASES:
                     self._fail(
                         f"{where}: mode value {raw} is named {name!r}; expected one of "
                         "Disabled, Speed, Torque"
@@ -419,12 +370,12 @@ class RigDbc:
                     f"{frame.name}.{s.name} = {v!r} outside [{s.minimum}, {s.maximum}]",
                 )
             if s.role == "cmd.mode":
-                names = s.choices or _DEFAULT_MODE_VALUES
+                names = s.choices or DEFAULT_MODE_VALUES
                 if int(v) not in names:
                     return Rejection(
                         "undecodable", f"{frame.name}.{s.name}: {v!r} is not a defined value"
                     )
-                out[s.role] = _MODE_NAMES[str(names[int(v)]).strip().lower()]
+                out[s.role] = MODE_ALIASES[str(names[int(v)]).strip().lower()]
             elif s.role:
                 out[s.role] = float(v)
         return out
@@ -442,9 +393,9 @@ class RigDbc:
                     values.get(s.role, "speed" if s.role == "cmd.mode" else 0.0) if s.role else 0.0
                 )
                 if s.role == "cmd.mode":
-                    names = s.choices or _DEFAULT_MODE_VALUES
+                    names = s.choices or DEFAULT_MODE_VALUES
                     v = next(
-                        raw for raw, n in names.items() if _MODE_NAMES[str(n).strip().lower()] == v
+                        raw for raw, n in names.items() if MODE_ALIASES[str(n).strip().lower()] == v
                     )
                 data[s.name] = v
             payload = frame.message.encode(data, scaling=True, strict=True)

@@ -152,8 +152,19 @@ def _runner_or_fail(runner: str | os.PathLike[str] | None) -> str:
     return os.fspath(path)
 
 
-def _common(period: float, substeps: int, timeout: float) -> list[str]:
+def _command_head(
+    runner: str | os.PathLike[str] | None,
+    params: str | os.PathLike[str],
+    period: float,
+    substeps: int,
+    timeout: float,
+) -> list[str]:
+    """The runner, its parameter file and the timing options: how every
+    command line of the runner starts."""
     return [
+        _runner_or_fail(runner),
+        "--params",
+        os.fspath(params),
         "--period",
         repr(float(period)),
         "--substeps",
@@ -182,12 +193,7 @@ def live_command(
     runner: str | os.PathLike[str] | None = None,
 ) -> list[str]:
     """Command line of a live (paced) run of the runner."""
-    cmd = [
-        _runner_or_fail(runner),
-        "--params",
-        os.fspath(params),
-        *_common(period, substeps, timeout),
-    ]
+    cmd = _command_head(runner, params, period, substeps, timeout)
     cmd += ["--transport", transport]
     if transport == "socketcan":
         cmd += ["--channel", channel]
@@ -203,9 +209,7 @@ def live_command(
         cmd += ["--cpu", str(int(cpu))]
     if mlockall:
         cmd.append("--mlockall")
-    if json:
-        cmd.append("--json")
-    return cmd
+    return cmd + (["--json"] if json else [])
 
 
 def replay_command(
@@ -221,18 +225,11 @@ def replay_command(
     runner: str | os.PathLike[str] | None = None,
 ) -> list[str]:
     """Command line of a replay of a candump .log through the runner."""
-    cmd = [
-        _runner_or_fail(runner),
-        "--params",
-        os.fspath(params),
-        *_common(period, substeps, timeout),
-    ]
+    cmd = _command_head(runner, params, period, substeps, timeout)
     cmd += ["--replay", os.fspath(log), "--tail", repr(float(tail))]
     if out is not None:
         cmd += ["-o", os.fspath(out)]
-    if json:
-        cmd.append("--json")
-    return cmd
+    return cmd + (["--json"] if json else [])
 
 
 def launch(command: Sequence[str], **popen: Any) -> subprocess.Popen:
