@@ -344,3 +344,14 @@ def test_setup_errors(gear: Any, gear_dbc: RigDbc, rack_dbc: RigDbc) -> None:
         Bridge.from_model(gear, gear_dbc, timeout=0.0)
     with pytest.raises(BridgeError, match="needs a bus"):
         Bridge.from_model(gear, gear_dbc).run(duration=0.01)
+
+
+def test_counter_fields_follow_the_one_list_of_status_counters():
+    # Counters spells its fields out (with their docs); the status frame's
+    # counter list in dbc_rules is the one source: same names, same order.
+    from dataclasses import fields
+
+    from gearsim.hil.dbc_rules import STATUS_COUNTS
+
+    ints = [f.name for f in fields(Counters) if f.type in (int, "int")]
+    assert ints == [*STATUS_COUNTS, "steps"]
