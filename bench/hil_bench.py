@@ -18,7 +18,7 @@ Replay throughput: one session log (commands every 10 ms and the recorded
 feedback, --replay-seconds of simulated time, candump .log) replayed by
 gearsim-hil and by gearsim.hil.replay; input frames per wall second.
 
-    python bench/hil_bench.py [--seconds 60] [--rates 1000,10000] [--spin-us 50]
+    python bench/hil_bench.py [--seconds 60] [--rates 1000,10000] [--spin-us US]
                               [--fifo 50] [--replay-seconds 60] [--no-python] [--out FILE.json]
 """
 
@@ -59,7 +59,7 @@ def command_lines(dbc: RigDbc, t: float) -> bytes:
 
 
 def c_loop(
-    runner: Path, params: Path, rate: float, seconds: float, spin_us: int, fifo: int | None
+    runner: Path, params: Path, rate: float, seconds: float, spin_us: int | None, fifo: int | None
 ) -> dict[str, Any]:
     """The C runner paced for `seconds`, driven by this process over pipes."""
     dbc = RigDbc(block="gear")
@@ -277,7 +277,12 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=60.0, help="wall seconds per loop measurement")
     ap.add_argument("--rates", default="1000,10000", help="frame rates in Hz, comma-separated")
-    ap.add_argument("--spin-us", type=int, default=50, help="the C runner's final spin")
+    ap.add_argument(
+        "--spin-us",
+        type=int,
+        default=None,
+        help="the C runner's final spin in us (default: the runner's automatic one)",
+    )
     ap.add_argument("--python-spin", type=float, default=2e-4, help="the Python bridge's spin (s)")
     ap.add_argument(
         "--fifo",

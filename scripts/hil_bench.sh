@@ -5,7 +5,7 @@
 # Builds the runner in Release first (build/hil-bench). Run it on an idle
 # machine: the figures are the machine's scheduling as much as the code's.
 #
-# Usage: scripts/hil_bench.sh [--seconds 60] [--rates 1000,10000] [--spin-us 50]
+# Usage: scripts/hil_bench.sh [--seconds 60] [--rates 1000,10000] [--spin-us US]
 #                             [--fifo 50] [--replay-seconds 60] [--no-python] [--out FILE.json]
 #   (options go to bench/hil_bench.py; --seconds 5 is a smoke run)
 # Environment: GEARSIM_PYTHON  the Python with gearsim installed (default: .venv).

@@ -110,7 +110,7 @@ static void parse_args(int argc, char **argv, options *o)
     o->rx = "-";
     o->tx = "-";
     o->channel = "can0";
-    o->spin_us = 50;
+    o->spin_us = -1; /* automatic: see spin_ns_for */
     o->fifo_priority = 0;
     o->cpu = -1;
     for (int i = 1; i < argc; ++i) {
@@ -563,13 +563,27 @@ static void sleep_until_ns(int64_t t)
     (void)clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL);
 }
 
+/* The final busy-wait before each deadline. Automatic (no --spin-us): 200 us,
+ * at most half the period. On this kind of VM a vCPU that idles for most of a
+ * 1 ms period wakes up tens to hundreds of microseconds late even with 1 ns
+ * timer slack; 200 us of spin absorbs that (measured p99 lateness at 1 kHz:
+ * 54 us with a 50 us spin, 0.1 us with 200 us), at about 20 % of a core. */
+static int64_t spin_ns_for(long spin_us, int64_t period_ns)
+{
+    if (spin_us >= 0) {
+        return (int64_t)spin_us * 1000;
+    }
+    const int64_t automatic = 200000;
+    return automatic < period_ns / 2 ? automatic : period_ns / 2;
+}
+
 /* The paced loop. Only clock reads, clock_nanosleep, non-blocking read/write
  * and the bridge run here. */
 static void paced_loop(const options *o, uint64_t end_period)
 {
     gs_hil_bridge *b = &rig.bridge;
     const int64_t period_ns = (int64_t)llround(b->period_s * 1e9);
-    const int64_t spin_ns = (int64_t)o->spin_us * 1000;
+    const int64_t spin_ns = spin_ns_for(o->spin_us, period_ns);
     const int64_t max_lag_ns = (int64_t)llround(o->max_lag_s * 1e9);
     int64_t deadline = now_ns();
     int64_t previous_start = -1;
