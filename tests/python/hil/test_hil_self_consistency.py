@@ -1,6 +1,6 @@
-"""Issue 16, the Python side: the DBC shipped from hil/dbc, python-can's
-configuration for `gearsim hil run`, `--runner c`, and a recording in rig time
-that converts into a CSV the same model reproduces."""
+"""The Python bridge around the C runner: the DBC shipped from hil/dbc,
+python-can's configuration for `gearsim hil run`, `--runner c`, and a recording
+in rig time that converts into a CSV the same model reproduces."""
 
 from __future__ import annotations
 
