@@ -50,6 +50,15 @@ _RIG = {
     "temperature_input": "rig.temperature_source",
     "accel_filter_time_constant": "rig.accel_filter_time_constant_s",
     "contact_substeps": "rig.contact_substeps",
+    "load_breakaway_friction": "rig.load_breakaway_friction",
+    "load_stribeck_speed": "rig.load_stribeck_speed",
+    "compliance_stiffness": "rig.compliance_stiffness_Nm_rad",
+    "compliance_damping": "rig.compliance_damping_Nm_s_rad",
+    "ripple_revolution_amplitude": "rig.ripple_revolution_amplitude_Nm",
+    "ripple_revolution_phase": "rig.ripple_revolution_phase_rad",
+    "ripple_mesh_amplitude": "rig.ripple_mesh_amplitude_Nm",
+    "ripple_mesh_phase": "rig.ripple_mesh_phase_rad",
+    "ripple_mesh_teeth": "rig.ripple_mesh_teeth",
 }
 
 GEAR_FIELDS: dict[str, str] = {

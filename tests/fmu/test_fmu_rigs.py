@@ -109,6 +109,17 @@ def test_every_parameter_with_c_default_and_unit(model_descriptions, reference, 
     assert by_name["dt"].unit == "s" and by_name["dt"].variability == "fixed"
     assert by_name["efficiency_const"].variability == "tunable"
     assert by_name["temperature_vector[1]"].unit == "K"
+    # the rig terms beyond the seed blocks: driven-side units follow the rig
+    assert by_name["load_breakaway_friction"].unit == ("N.m" if rig == "gear" else "N")
+    assert by_name["load_stribeck_speed"].unit == ("rad/s" if rig == "gear" else "m/s")
+    assert by_name["compliance_stiffness"].unit == "N.m/rad"
+    assert by_name["compliance_stiffness"].variability == "fixed"
+    assert by_name["compliance_damping"].unit == "N.m.s/rad"
+    for family in ("revolution", "mesh"):
+        assert by_name[f"ripple_{family}_amplitude[2]"].unit == "N.m"
+        assert by_name[f"ripple_{family}_phase[2]"].unit == "rad"
+        assert f"ripple_{family}_phase[3]" not in by_name
+    assert by_name["ripple_mesh_teeth"].type == "Integer"
     units = {u.name for u in md.unitDefinitions}
     assert all(v.unit in units for v in md.modelVariables if v.unit is not None)
 
@@ -272,6 +283,56 @@ def _scenarios():
                 "inputs.ambient_temperature": np.full_like(t, 300.0),
             },
         ),
+        # the rig terms beyond the seed blocks (physics.md 11): a compliant
+        # base shaft with Stribeck friction and both ripple families
+        "gear_speed_compliant_stribeck_ripple": dict(
+            rig="gear",
+            dt=1e-3,
+            substeps=2,
+            n=250,
+            start={
+                "friction_model": 1,
+                "efficiency_const": 0.9,
+                "base_inertia": 2e-3,
+                "compliance_stiffness": 400.0,
+                "compliance_damping": 0.2,
+                "load_coulomb_friction": 0.3,
+                "load_breakaway_friction": 0.8,
+                "load_stribeck_speed": 0.5,
+                "ripple_revolution_amplitude[1]": 0.2,
+                "ripple_revolution_phase[1]": 0.3,
+                "ripple_revolution_amplitude[2]": 0.05,
+                "ripple_mesh_amplitude[1]": 0.04,
+                "ripple_mesh_phase[2]": -1.0,
+                "ripple_mesh_amplitude[2]": 0.01,
+                "ripple_mesh_teeth": 19,
+            },
+            inputs=lambda t: {
+                "inputs.base_speed": 12.0 * np.sin(two_pi * 2.0 * t),
+                "inputs.load": np.where(t < 0.2, 0.5, -1.0),
+            },
+        ),
+        "rack_torque_stribeck_ripple": dict(
+            rig="rack",
+            dt=1e-3,
+            substeps=1,
+            n=300,
+            start={
+                "base_drive": 1,
+                "base_inertia": 1e-3,
+                "rack_mass": 1.0,
+                "pinion_radius": 0.02,
+                "load_coulomb_friction": 5.0,
+                "load_breakaway_friction": 15.0,
+                "load_stribeck_speed": 0.013,
+                "ripple_mesh_amplitude[1]": 0.02,
+                "ripple_mesh_teeth": 12,
+            },
+            inputs=lambda t: {
+                "inputs.base_torque": 0.5 * np.sin(two_pi * 3.0 * t),
+                "inputs.load": np.full_like(t, 2.0),
+            },
+        ),
     }
 
 
@@ -359,6 +420,22 @@ BAD_VALUES = [
     ("rack", {"parameterization": 1, "spacing": 0.0}, "spacing"),
     ("rack", {"heat_path": True, "thermal_resistance": 0.0}, "thermal_resistance"),
     ("rack", {"backlash_enabled": True, "stiffness": float("nan")}, "stiffness"),
+    (
+        "gear",
+        {"load_coulomb_friction": 2.0, "load_breakaway_friction": 1.0},
+        "load_breakaway_friction",
+    ),
+    ("rack", {"load_breakaway_friction": 1.0, "load_stribeck_speed": 0.0}, "load_stribeck_speed"),
+    ("gear", {"compliance_stiffness": 100.0}, "base_inertia"),
+    (
+        "rack",
+        {"compliance_stiffness": 100.0, "base_inertia": 1e-3, "base_drive": 1},
+        "compliance_stiffness",
+    ),
+    ("gear", {"compliance_damping": -0.1}, "compliance_damping"),
+    ("gear", {"ripple_revolution_amplitude[2]": -0.1}, "ripple_revolution_amplitude"),
+    ("rack", {"ripple_mesh_amplitude[1]": 0.1}, "ripple_mesh_teeth"),
+    ("gear", {"ripple_mesh_phase[2]": float("inf")}, "ripple_mesh_phase"),
 ]
 
 
@@ -559,3 +636,24 @@ def test_tunable_load_offset_matches_shifted_load_in_c(instance, reference):
     ref_out = np.column_stack([direct[o] for o in OUTPUTS])
     assert fmu_out.tobytes() == ref_out.tobytes()
     MAX_DIFFS["tunable_load_offset"] = float(np.max(np.abs(fmu_out - ref_out)))
+
+
+def test_tunable_ripple_adds_its_torque_at_the_mid_angle(instance):
+    """A lossless speed-driven gear at a constant 6 rad/s from rest: step i
+    (1-based) turns the base from (i-1)*w*h to i*w*h, and the ripple is taken
+    at the mid angle (i - 1/2)*w*h (physics.md 11). Switching on A1 = 0.4 N*m
+    at phase 0.25 rad from step 31 adds A1*cos((i - 1/2)*w*h + 0.25) to
+    base_torque, which is 0 before (no load, no loss, constant speed)."""
+    h, n, k, w, amp, phase = 1e-3, 60, 30, 6.0, 0.4, 0.25
+    inst = instance("gear")
+    inst.start({"friction_model": 0})
+    torques = []
+    for i in range(n):
+        if i == k:
+            inst.set({"ripple_revolution_amplitude[1]": amp, "ripple_revolution_phase[1]": phase})
+        inst.set({"inputs.base_speed": w, "inputs.load": 0.0})
+        inst.step(h)
+        torques.append(inst.get(["base_torque"])[0])
+    theta_mid = (np.arange(1, n + 1) - 0.5) * w * h
+    expected = np.where(np.arange(n) < k, 0.0, amp * np.cos(theta_mid + phase))
+    np.testing.assert_allclose(torques, expected, rtol=0, atol=1e-13)

@@ -391,7 +391,87 @@ def _rig_params(
             options=(("speed", "GS_BASE_SPEED_DRIVEN"), ("torque", "GS_BASE_TORQUE_DRIVEN")),
             doc="speed-driven or torque-driven base shaft",
         ),
+        *_stribeck(load_unit, speed_unit),
+        *_COMPLIANCE,
+        *_RIPPLE,
     )
+
+
+def _stribeck(load_unit: str, speed_unit: str) -> tuple[Param, ...]:
+    """The Stribeck hump of the driven side's friction (driven-side units)."""
+    return (
+        Param(
+            "load_breakaway_friction",
+            REAL,
+            load_unit,
+            "load_breakaway_friction",
+            doc="driven-side friction at rest (Stribeck); 0 = none, else >= load_coulomb_friction",
+        ),
+        Param(
+            "load_stribeck_speed",
+            REAL,
+            speed_unit,
+            "load_stribeck_speed",
+            doc="speed over which the friction falls from breakaway to Coulomb",
+        ),
+    )
+
+
+# The compliant base shaft and the ripple act on the base side: the same units
+# in both rigs (the pinion is the base of the rack rig).
+_COMPLIANCE = (
+    Param(
+        "compliance_stiffness",
+        REAL,
+        "N*m/rad",
+        "compliance_stiffness_Nm_rad",
+        doc="torsional stiffness of the base shaft, drive to base gear; 0 = rigid",
+    ),
+    Param(
+        "compliance_damping",
+        REAL,
+        "N*m*s/rad",
+        "compliance_damping_Nm_s_rad",
+        doc="torsional damping of the base shaft",
+    ),
+)
+
+_RIPPLE = (
+    Param(
+        "ripple_revolution_amplitude",
+        PAIR,
+        "N*m",
+        "ripple_revolution_amplitude_Nm",
+        doc="base-side ripple amplitudes of the 1st and 2nd harmonic per revolution",
+    ),
+    Param(
+        "ripple_revolution_phase",
+        PAIR,
+        "rad",
+        "ripple_revolution_phase_rad",
+        doc="phases of the per-revolution ripple harmonics",
+    ),
+    Param(
+        "ripple_mesh_amplitude",
+        PAIR,
+        "N*m",
+        "ripple_mesh_amplitude_Nm",
+        doc="base-side ripple amplitudes of the 1st and 2nd harmonic per tooth mesh",
+    ),
+    Param(
+        "ripple_mesh_phase",
+        PAIR,
+        "rad",
+        "ripple_mesh_phase_rad",
+        doc="phases of the per-tooth ripple harmonics",
+    ),
+    Param(
+        "ripple_mesh_teeth",
+        INT,
+        field="ripple_mesh_teeth",
+        doc="teeth of the base gear (pinion) per revolution; >= 1 with a mesh ripple",
+    ),
+)
 
 
 GEAR_RIG_PARAMS = _rig_params("follower_inertia", "kg*m**2", "N*m", "rad/s")

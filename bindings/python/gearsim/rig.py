@@ -181,8 +181,13 @@ class Rig:
             load_coulomb_friction, load_coulomb_speed_threshold, load_offset,
             thermal_resistance (None = adiabatic), ambient_temperature,
             base_inertia, initial_base_speed, accel_filter_time_constant,
-            contact_substeps, base_drive ("speed" or "torque"). SI numbers or
-            unit strings; missing ones take the defaults (Rig.defaults()).
+            contact_substeps, base_drive ("speed" or "torque"),
+            load_breakaway_friction, load_stribeck_speed (Stribeck friction),
+            compliance_stiffness, compliance_damping (compliant base shaft),
+            ripple_revolution_amplitude, ripple_revolution_phase,
+            ripple_mesh_amplitude, ripple_mesh_phase (2 values each),
+            ripple_mesh_teeth (base-side torque ripple). SI numbers or unit
+            strings; missing ones take the defaults (Rig.defaults()).
     """
 
     def __init__(
@@ -228,6 +233,7 @@ class Rig:
         self._follower_per_base = float(info.follower_per_base)
         self._h_omega_n = float(info.contact_h_omega_n)
         self._substeps_capped = bool(info.substeps_capped)
+        self._info = _info_dict(info)
         if self._substeps_capped:
             warnings.warn(
                 f"backlash contact: the automatic sub-step count stopped at "
@@ -336,6 +342,25 @@ class Rig:
         return self._h_omega_n
 
     @property
+    def compliance_substeps(self) -> int:
+        """Sub-steps per step of the compliant base shaft (1 without compliance)."""
+        return int(self._info["compliance_substeps"])
+
+    @property
+    def compliance_h_omega_n(self) -> float:
+        """h*omega_c of the compliant shaft at its sub-step, omega_c = sqrt(k/J_eff)
+        (0 without compliance): <= 0.2 unless the sub-step count is at its cap
+        of 16; the shaft then rings (2/h)*atan(h*omega_c/2) instead of omega_c."""
+        return float(self._info["compliance_h_omega_n"])
+
+    @property
+    def info(self) -> dict[str, float | int]:
+        """Everything init chose (gs_rig_info, field by field): contact_substeps,
+        contact_h_omega_n, substeps_capped, follower_per_base,
+        compliance_substeps, compliance_h_omega_n."""
+        return dict(self._info)
+
+    @property
     def substeps_capped(self) -> bool:
         """True when the automatic sub-step count stopped at its cap with
         h*omega_n > 0.5 (a SubstepWarning was issued at construction)."""
@@ -356,7 +381,7 @@ class Rig:
         in state_units): temperature, backlash_position, contact_force,
         follower_torque, contact_locked (the block's), base_speed, base_angle,
         follower_speed, follower_position, base_speed_sample,
-        base_acceleration, started. Floats, and ints for the flags. A copy:
+        base_acceleration, shaft_twist, started. Floats, and ints for the flags. A copy:
         writing to it does not change the rig (use snapshot/restore)."""
         buf = ffi.buffer(self._state)
         return {name: unpack(buf, offset)[0] for name, unpack, offset in _STATE_READERS}
@@ -595,6 +620,17 @@ def _step_checked(stepper: Any, *values: Any) -> None:
     the fast path's conversion refused but float() takes, such as "1.5")."""
     good = [_finite(name, value) for name, value in zip(_STEP_INPUTS, values, strict=True)]
     _step_c(stepper, *good)  # all finite floats now: the shim steps and returns 0
+
+
+def _info_dict(info: Any) -> dict[str, float | int]:
+    """gs_rig_info -> {field: value}, every field of the C struct (ints stay ints)."""
+    values: dict[str, float | int] = {}
+    for name, field in ffi.typeof("gs_rig_info").fields:
+        raw = getattr(info, name)
+        values[name] = (
+            int(raw) if field.type.kind == "primitive" and field.type.cname == "int" else float(raw)
+        )
+    return values
 
 
 def _finite(name: str, value: Any) -> float:
