@@ -120,6 +120,15 @@ static const field_spec rig_fields[] = {
     ENUM("rig.", gs_rig_params, temperature_source, temperature_options),
     REAL("rig.", gs_rig_params, accel_filter_time_constant_s),
     INT("rig.", gs_rig_params, contact_substeps),
+    REAL("rig.", gs_rig_params, load_breakaway_friction),
+    REAL("rig.", gs_rig_params, load_stribeck_speed),
+    REAL("rig.", gs_rig_params, compliance_stiffness_Nm_rad),
+    REAL("rig.", gs_rig_params, compliance_damping_Nm_s_rad),
+    REALS("rig.", gs_rig_params, ripple_revolution_amplitude_Nm, GS_RIPPLE_HARMONICS),
+    REALS("rig.", gs_rig_params, ripple_revolution_phase_rad, GS_RIPPLE_HARMONICS),
+    REALS("rig.", gs_rig_params, ripple_mesh_amplitude_Nm, GS_RIPPLE_HARMONICS),
+    REALS("rig.", gs_rig_params, ripple_mesh_phase_rad, GS_RIPPLE_HARMONICS),
+    INT("rig.", gs_rig_params, ripple_mesh_teeth),
 };
 
 static const field_spec run_fields[] = {
