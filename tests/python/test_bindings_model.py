@@ -290,3 +290,27 @@ def test_model_pickles():
     again = pickle.loads(pickle.dumps(model))
     assert again == model
     assert again.rig().run(base_speed=[1.0, 2.0]).base_torque.shape == (2,)
+
+
+def test_analysis_table_is_kept_through_load_replace_and_save(tmp_path):
+    # A model written by `gearsim fit --add sensor_delay --out` has an
+    # [analysis] table; every tool that loads models (HIL bridge, examples)
+    # must read it and write it back unchanged.
+    path = tmp_path / "fitted.toml"
+    path.write_text(
+        '[rig]\nblock = "simple_gear"\n[block]\nteeth_ratio = 2.0\n'
+        '[analysis]\ntorque_delay = "6 ms"\n',
+        encoding="utf-8",
+    )
+    model = gearsim.Model.load(path)
+    assert model.analysis == {"torque_delay": "6 ms"}
+    changed = model.replace(block_params={"teeth_ratio": 3.0})
+    assert changed.analysis == {"torque_delay": "6 ms"}
+    again = gearsim.Model.loads(changed.dumps())
+    assert again.analysis == {"torque_delay": "6 ms"}
+    assert again.block_params["teeth_ratio"] == 3.0
+
+
+def test_analysis_must_be_a_table():
+    with pytest.raises(gearsim.ModelFileError, match="analysis"):
+        gearsim.Model.loads('analysis = 3\n[rig]\nblock = "simple_gear"\n')

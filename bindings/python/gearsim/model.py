@@ -16,6 +16,11 @@ converted by pint to the parameter's SI unit (gearsim.params). A missing
 parameter takes its default. An unknown key or a value of the wrong type raises
 ModelFileError, an invalid value ParameterError (also a ModelFileError when read
 from a file); both carry .file and .parameter.
+
+An optional ``[analysis]`` table (``torque_delay = "6 ms"``, written by
+``gearsim fit --add sensor_delay``) says how the analysis compares simulated and
+measured outputs. Model keeps it (``Model.analysis``) and writes it back, so a
+fitted model file loads everywhere; gearsim.analysis.load_model validates it.
 """
 
 from __future__ import annotations
@@ -35,7 +40,7 @@ from .rig import GearRig, RackRig, Rig
 
 __all__ = ["Model"]
 
-_TOP_KEYS = ("rig", "block")
+_TOP_KEYS = ("rig", "block", "analysis")
 
 
 class Model:
@@ -65,8 +70,14 @@ class Model:
         rig_params: Mapping[str, Any] | None = None,
         *,
         file: str | PathLike[str] | None = None,
+        analysis: Mapping[str, Any] | None = None,
     ) -> None:
         self.file: Path | None = None if file is None else Path(file)
+        # The optional [analysis] table (e.g. torque_delay): settings of how
+        # gearsim.analysis compares simulated with measured outputs, not rig
+        # parameters. Carried through replace/to_dict unread; gearsim.analysis
+        # (load_model) validates it.
+        self.analysis: dict[str, Any] = dict(analysis or {})
         try:
             self._init(block, block_params, rig_params)
         except GearsimError as exc:
@@ -139,6 +150,7 @@ class Model:
             self.block,
             {k: v for k, v in new_block.items() if v is not None},
             {k: v for k, v in new_rig.items() if v is not None},
+            analysis=self.analysis,
         )
 
     # -- simulation -------------------------------------------------------------------
@@ -158,7 +170,10 @@ class Model:
         """{"rig": {"block": ..., **rig_params}, "block": {**block_params}} (SI)."""
         rig = {"block": self.block}
         rig.update({k: v for k, v in self._rig_params.items() if v is not None})
-        return {"rig": rig, "block": self.block_params}
+        out = {"rig": rig, "block": self.block_params}
+        if self.analysis:
+            out["analysis"] = dict(self.analysis)
+        return out
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], file: str | PathLike[str] | None = None) -> Model:
@@ -169,11 +184,13 @@ class Model:
             for key in data:
                 if key not in _TOP_KEYS:
                     raise ModelFileError(
-                        f"unknown table {key!r}; expected [rig] and [block]", parameter=str(key)
+                        f"unknown table {key!r}; expected [rig], [block] and optionally [analysis]",
+                        parameter=str(key),
                     )
             rig = data.get("rig", {})
             block_params = data.get("block", {})
-            for name, table in (("rig", rig), ("block", block_params)):
+            analysis = data.get("analysis", {})
+            for name, table in (("rig", rig), ("block", block_params), ("analysis", analysis)):
                 if not isinstance(table, Mapping):
                     raise ModelFileError(f"{name} must be a table ([{name}])", parameter=name)
             if "block" not in rig:
@@ -184,7 +201,7 @@ class Model:
             rig_params = {k: v for k, v in rig.items() if k != "block"}
         except GearsimError as exc:
             raise with_file(exc, file) from None
-        return cls(block, block_params, rig_params, file=file)
+        return cls(block, block_params, rig_params, file=file, analysis=analysis)
 
     @classmethod
     def loads(cls, text: str, file: str | PathLike[str] | None = None) -> Model:
