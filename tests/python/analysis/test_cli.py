@@ -170,6 +170,47 @@ def test_fit_json_and_out(tmp_path, gear_csv):
     assert p.returncode == 2 and "already" in p.stderr
 
 
+def test_fit_sensor_delay_writes_the_analysis_table(tmp_path):
+    # the torque column logged 5 samples late: fit writes [analysis]
+    # torque_delay, and compare applies it when it reads the new model
+    import tomllib
+
+    from analysis_helpers import base_model, measurement
+
+    from gearsim.analysis import Measurement, write_measurement
+
+    meas = measurement("simple_gear", ("coulomb_friction",), samples=4000)
+    spec = meas.spec
+    cols = {c: meas[c] for c in (spec.speed_input, spec.load_input, spec.speed_output)}
+    torque = meas[spec.torque_output]
+    cols[spec.torque_output] = [torque[0]] * 5 + list(torque[:-5])
+    csv = tmp_path / "late.csv"
+    write_measurement(csv, Measurement.from_arrays("simple_gear", meas.time, path="late", **cols))
+    model = tmp_path / "model.toml"
+    base_model("simple_gear").replace(rig_params={"load_coulomb_friction": 1.5}).save(model)
+    new = tmp_path / "new.toml"
+    out = one_json(
+        run("fit", csv, "--model", model, "--add", "sensor_delay", "--out", new, "--json")
+    )
+    assert out["parameters"]["torque_delay"] == pytest.approx(5e-3, abs=2.5e-4)
+    table = tomllib.loads(new.read_text())["analysis"]
+    assert table["torque_delay"] == pytest.approx(out["parameters"]["torque_delay"])
+    again = one_json(run("compare", csv, "--model", new, "--json"))
+    assert again["nrmse"] == pytest.approx(out["nrmse_after"], rel=1e-6)
+    p = run("fit", csv, "--model", new, "--add", "sensor_delay")
+    assert p.returncode == 2 and "already" in p.stderr
+
+
+def test_bad_analysis_key(tmp_path, gear_csv):
+    csv, _ = gear_csv
+    model = tmp_path / "bad.toml"
+    model.write_text(
+        '[rig]\nblock = "simple_gear"\n[block]\nteeth_ratio = 3.0\n'
+        '[analysis]\ntorque_delay = "3 parsecs"\n'
+    )
+    _bad(run("compare", csv, "--model", model), "bad.toml", "torque_delay")
+
+
 def test_report(tmp_path, gear_csv):
     csv, model = gear_csv
     out_dir = tmp_path / "rep"
@@ -178,9 +219,12 @@ def test_report(tmp_path, gear_csv):
     )
     html = (out_dir / "report.html").read_text()
     assert html.count("data:image/png;base64,") >= 5
-    for name in ("overlay", "residual", "residual_vs", "regimes", "error_fall"):
+    for name in ("overlay", "residual", "residual_vs", "regimes", "error_fall", "signatures"):
         assert (out_dir / f"{name}.png").stat().st_size > 1000
     assert [r["effect"] for r in out["rounds"]] == [None, "coulomb_friction"]
+    # Coulomb friction's look-alike with a signature plot is among the first
+    # candidates: its friction-against-speed plot is on the page
+    assert "Signatures of the effects diagnosed" in html
     r0, r1 = out["rounds"]
     assert r1["validation_nrmse"] < 0.5 * r0["validation_nrmse"]
     assert "validation" in html and "score" in html and "fails" in html

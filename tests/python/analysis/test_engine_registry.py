@@ -15,7 +15,15 @@ from gearsim.analysis.effects import Effect, get_effect
 from gearsim.analysis.errors import EffectError
 
 ANALYSIS = os.path.join(REPO, "bindings", "python", "gearsim", "analysis")
-ENGINE = ("diagnose.py", "fitting.py", "report.py", "scoring.py", "identifiability.py")
+ENGINE = (
+    "diagnose.py",
+    "fitting.py",
+    "report.py",
+    "scoring.py",
+    "identifiability.py",
+    "simulate.py",
+    "signatures.py",
+)
 
 
 def _subclasses(cls):
@@ -35,6 +43,8 @@ def test_every_contract_effect_has_exactly_one_class():
         assert name not in EFFECTS
         with pytest.raises(EffectError, match="unknown effect"):
             get_effect(name)
+    with pytest.raises(EffectError, match="unknown effect"):
+        get_effect("backlash_of_the_mind")
 
 
 def test_every_class_says_what_separates_it():

@@ -129,10 +129,25 @@ def test_failing_regime_stands_out():
 def test_effect_table():
     assert EFFECT_NAMES == CONTRACT_EFFECTS
     gear, rack = base_model("simple_gear"), base_model("rack_pinion")
-    assert len(applicable_effects(gear)[0]) == 7
+    # without a teeth count the ripple is not a candidate, and says why
+    usable, skipped = applicable_effects(gear)
+    assert [e.name for e in usable] == [n for n in EFFECT_NAMES if n != "torque_ripple"]
+    assert "ripple_mesh_teeth" in skipped["torque_ripple"]
     assert [e.name for e in applicable_effects(rack)[0]] == [
-        n for n in EFFECT_NAMES if n != "load_dependent_efficiency"
+        n for n in EFFECT_NAMES if n not in ("load_dependent_efficiency", "torque_ripple")
     ]
+    # the teeth count given in [rig], or the rack's tooth parameters
+    toothed = gear.replace(rig_params={"ripple_mesh_teeth": 20})
+    assert "torque_ripple" in [e.name for e in applicable_effects(toothed)[0]]
+    rack_teeth = rack.replace(
+        block_params={"parameterization": "tooth_parameters", "teeth_count": 12, "spacing": 0.01}
+    )
+    assert "torque_ripple" in [e.name for e in applicable_effects(rack_teeth)[0]]
+    # the C rig refuses a compliant shaft with backlash: neither is offered with the other
+    lash = gear.replace(block_params={"backlash_enabled": True, "linear_backlash": 1e-3})
+    assert "rigid mesh" in applicable_effects(lash)[1]["compliance"]
+    shaft = gear.replace(rig_params={"base_inertia": 0.01, "compliance_stiffness": 100.0})
+    assert "rigid base shaft" in applicable_effects(shaft)[1]["backlash"]
     with pytest.raises(EffectError, match="unknown effect 'foo'"):
         get_effect("foo")
     with pytest.raises(EffectError, match="does not apply"):

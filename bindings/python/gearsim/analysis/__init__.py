@@ -4,10 +4,9 @@ compare a model with a measurement, see in which operating regimes it fails,
 find the missing physical effect from the residual's signature, fit it on the
 C simulation and watch the error fall (docs/analysis.md).
 
-    from gearsim import Model
-    from gearsim.analysis import load_measurement, compare, diagnose, fit
+    from gearsim.analysis import load_measurement, load_model, compare, diagnose, fit
 
-    model = Model.load("model.toml")
+    model = load_model("model.toml")   # a gearsim.Model plus its [analysis] table
     meas = load_measurement("run.csv", model.block)
     print(compare(model, meas).nrmse)
     d = diagnose(model, meas)
@@ -27,6 +26,7 @@ from .errors import AnalysisError, EffectError, MeasurementError
 from .fitting import FitResult
 from .measurement import RIG_SPECS, Measurement, load_measurement, write_measurement
 from .metrics import OutputMetrics, nrmse, output_metrics
+from .modelkit import AnalysisModel, load_model
 from .simulate import Inputs, prepare_inputs, simulate
 
 __all__ = [
@@ -45,6 +45,8 @@ __all__ = [
     "Measurement",
     "load_measurement",
     "write_measurement",
+    "load_model",
+    "AnalysisModel",
     "RIG_SPECS",
     "OutputMetrics",
     "nrmse",

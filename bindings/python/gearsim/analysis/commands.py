@@ -220,13 +220,13 @@ def _load(args: argparse.Namespace, filt: Any = None, check: Any = None):
     --input-filter cut-off checked against the data's Nyquist frequency, and
     check(model) if given. The loader's notes are printed on stderr only once
     every check passed: a refusal stays one line."""
-    from .. import Model
     from ..errors import ModelFileError
     from .measurement import load_measurement, parse_column_map
+    from .modelkit import load_model
 
     if not os.path.exists(args.model):
         raise ModelFileError("no such file", file=printable(args.model, limit=200))
-    model = Model.load(args.model)
+    model = load_model(args.model)  # the Model plus its [analysis] table
     _check_magnitudes(model, args.model)
     notes: list[str] = []  # how the file was read or changed, and warnings
     meas = load_measurement(

@@ -192,12 +192,12 @@ def _screen_parameters(ctx: Context, eff: Effect, sr: Any) -> dict[str, Any]:
     """The effect's parameters as the screening seeds them (not fitted), in
     the same form as a fitted candidate's (program names, model values)."""
     from ..errors import GearsimError
-    from . import modelkit as mk
 
     seeds = {p.name: p.clipped_x0() for p in eff.parameters(ctx, sr)}
     try:
-        block, rig = eff.build(ctx, seeds)
-        return eff.report(mk.changed(ctx.model, block, rig))
+        from .effects import apply_changes
+
+        return eff.report(apply_changes(ctx.model, eff.build(ctx, seeds)))
     except (GearsimError, ValueError, KeyError):  # a seed the block refuses: the raw seeds
         return seeds
 

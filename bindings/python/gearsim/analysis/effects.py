@@ -18,7 +18,11 @@ so that diagnose, fitting and report never test an effect's name:
 - ``report(model)``: how its fitted parameters are reported;
 - ``describe(ctx, screen, ...)``: the evidence text;
 - ``excitation`` / ``separated_from``: the excitation that tells it apart from
-  its look-alikes (identifiability warnings name it).
+  its look-alikes (identifiability warnings name it);
+- ``negligible(ctx, model)``: why the fitted size is below what the record
+  can claim (the candidate then does not help), or None;
+- ``plot(ctx, ax)``: the signature plot of the report, when the general
+  residual plots do not show it.
 
 Adding an effect means writing one subclass and registering it in EFFECTS.
 The driven inertia is re-estimated with every new effect (an inertia error
@@ -47,11 +51,14 @@ __all__ = [
     "coestimated",
     "nuisance_columns",
     "build_changes",
+    "apply_changes",
     "separating_excitation",
     "present_mesh_loss",
 ]
 
-Changes = tuple[dict[str, Any], dict[str, Any]]
+#: what Effect.build returns: (block, rig) changes, or (block, rig, analysis)
+#: for an effect that sets a key of the model file's [analysis] table
+Changes = tuple[dict[str, Any], ...]
 Column = tuple[str, np.ndarray, tuple[float, float]]
 
 
@@ -163,6 +170,9 @@ class Effect:
     excitation: str = ""
     separated_from: dict[str, str] = {}
     internal_excitation: str = ""
+    #: plot(ctx, ax): draws the effect's signature on a matplotlib axis for
+    #: the report (None: the report's general residual plots show it)
+    plot: Any = None
 
     # -- applicability
     def unavailable(self, model: Any) -> str | None:
@@ -211,6 +221,12 @@ class Effect:
     def notes(self, model: Any) -> list[str]:
         """Notes on how the fit reads the effect (identifiability by design)."""
         return []
+
+    def negligible(self, ctx: Any, model: Any) -> str | None:
+        """Why the effect as fitted in `model` is too small for the record to
+        claim it, although it may lower the error (then it does not help), or
+        None."""
+        return None
 
     # -- when the model already has it
     def coestimated(self, ctx: Any, screen: Any) -> list[FitParam]:
@@ -812,6 +828,11 @@ class Backlash(Effect):
     def present(self, model: Any) -> bool:
         return bool(mk.block_values(model).get("backlash_enabled", False))
 
+    def unavailable(self, model: Any) -> str | None:
+        if float(mk.rig_values(model).get("compliance_stiffness", 0.0)) > 0.0:
+            return "backlash needs a rigid base shaft (the model has a compliant one)"
+        return None
+
     def screen(self, ctx: Any) -> Any:
         from .signatures import backlash_evidence
 
@@ -940,6 +961,747 @@ class Backlash(Effect):
         }
 
 
+# ---------------------------------------------------------------- effects beyond the seed blocks
+
+
+def _rig_has(model: Any, key: str) -> str | None:
+    """None when this gearsim's rig has the parameter `key`, else why not."""
+    if key in mk.rig_values(model):
+        return None
+    return f"this gearsim build has no rig parameter {key}"
+
+
+def _cached(ctx: Any, name: str, make: Any) -> np.ndarray:
+    """A derived per-sample signal, computed once per baseline context."""
+    if name not in ctx.columns:
+        ctx.columns[name] = make()
+    return ctx.columns[name]
+
+
+def _torque_rate(ctx: Any) -> np.ndarray:
+    """d/dt of the simulated drive torque (undelayed), N*m/s."""
+    from .simulate import delayed
+
+    def make() -> np.ndarray:
+        y = ctx.sim.outputs[ctx.torque_output]
+        # the simulation applies the model's present delay; take it back out
+        d = mk.torque_delay(ctx.model)
+        y = delayed(y, -d / ctx.meas.dt) if d else y
+        return np.gradient(y, ctx.meas.dt)
+
+    return _cached(ctx, "torque_rate", make)
+
+
+class SensorDelay(Effect):
+    """A logger lag of the torque channel: the simulated torque is delayed by
+    torque_delay (model file [analysis] table) before it is compared."""
+
+    name = "sensor_delay"
+    summary = (
+        "delay of the measured torque relative to the speed channels ([analysis] torque_delay)"
+    )
+    signature_text = (
+        "residual correlates with the derivative of the simulated torque, peaking at half the delay"
+    )
+    excitation = "steps of acceleration (a delay shifts the torque steps, an inertia scales them)"
+    separated_from = {
+        "compliance": "steps of acceleration: a delay shifts the torque step, a compliant "
+        "shaft rings after it",
+        "inertia": "steps of acceleration: a delay shifts the torque step, an inertia scales it",
+    }
+    #: the largest delay searched (s): loggers lag by milliseconds
+    MAX_DELAY = 0.1
+
+    def present(self, model: Any) -> bool:
+        return mk.torque_delay(model) != 0.0
+
+    def columns(self, ctx: Any) -> list[Column]:
+        # first order: y(t - d) - y(t) ~ -d y'(t), in driven units
+        col = -_torque_rate(ctx) / ctx.kin
+        return [("torque_delay", col, (-self.MAX_DELAY, self.MAX_DELAY))]
+
+    def signature(self, ctx: Any) -> Any:
+        from .signatures import delay_signature
+
+        return delay_signature(
+            ctx.residual[ctx.torque_output],
+            ctx.meas[ctx.torque_output] - ctx.residual[ctx.torque_output],
+            ctx.meas.dt,
+            self.MAX_DELAY,
+        )
+
+    def _span(self, ctx: Any, seed: float) -> float:
+        return float(min(self.MAX_DELAY, max(20.0 * ctx.meas.dt, 4.0 * abs(seed))))
+
+    def parameters(self, ctx: Any, screen: Any) -> list[FitParam]:
+        cur = mk.torque_delay(ctx.model)
+        x0 = cur + _seed(screen, "torque_delay")
+        lim = self._span(ctx, x0)
+        return [
+            FitParam(
+                "torque_delay",
+                x0,
+                -lim,
+                lim,
+                "s",
+                before=cur,
+                owner=self.name,
+                # the interpolated delay is piecewise linear between samples:
+                # an absolute step of a twentieth of a sample
+                diff_step=0.05 * ctx.meas.dt,
+            )
+        ]
+
+    def build(self, ctx: Any, values: dict[str, float]) -> Changes:
+        if "torque_delay" not in values:
+            return {}, {}
+        return {}, {}, {"torque_delay": float(values["torque_delay"])}
+
+    def report(self, model: Any) -> dict[str, Any]:
+        return {"torque_delay": mk.torque_delay(model)}
+
+    #: delays under this many samples are not claimed: the sampling itself
+    #: blurs the channels' relative timing by up to a sample (a logger's
+    #: stamps), and a central-difference speed or a held output shifts a
+    #: channel by half a sample more
+    MIN_SAMPLES = 1.5
+
+    def negligible(self, ctx: Any, model: Any) -> str | None:
+        d = mk.torque_delay(model)
+        dt = ctx.meas.dt
+        if abs(d) >= self.MIN_SAMPLES * dt:
+            return None
+        return (
+            f"the fitted delay {1e3 * d:.3g} ms is under {self.MIN_SAMPLES:g} samples "
+            f"({1e3 * self.MIN_SAMPLES * dt:.3g} ms): within the timing resolution of the record"
+        )
+
+    def coestimated(self, ctx: Any, screen: Any) -> list[FitParam]:
+        return [_as_coestimated(p) for p in self.parameters(ctx, screen)]
+
+    def nuisance_columns(self, ctx: Any) -> list[Column]:
+        return self.columns(ctx)
+
+    def evidence_extra(self, ctx: Any, screen: Any, own: dict[str, float]) -> dict[str, Any]:
+        sig = self.signature(ctx)
+        return {
+            "peak_lag_s": sig.peak_lag_s,
+            "peak_correlation": sig.peak_r,
+            "delay_from_correlation_s": sig.delay_s,
+        }
+
+    def describe(self, ctx, screen, own, r, regime) -> str:
+        sig = self.signature(ctx)
+        return (
+            f"the residual correlates with the derivative of the simulated torque (r = "
+            f"{sig.peak_r:.2f} at a lag of {1e3 * sig.peak_lag_s:.2f} ms): the measured torque "
+            f"lags the model by about {1e3 * own.get('torque_delay', 0.0):.2f} ms; largest in "
+            f"{regime}"
+        )
+
+    def plot(self, ctx: Any, ax: Any) -> None:
+        sig = self.signature(ctx)
+        ax.plot(1e3 * sig.lags_s, sig.correlation, lw=1)
+        ax.axvline(1e3 * sig.peak_lag_s, color="C3", ls="--", lw=1)
+        ax.set_xlabel("lag (ms)")
+        ax.set_ylabel("corr(residual, d torque/dt)")
+        # a pure delay d peaks at d/2 with a negative correlation
+        ax.set_title(
+            f"sensor_delay: peak r = {sig.peak_r:.2f} at {1e3 * sig.peak_lag_s:.2f} ms "
+            "(a delay d peaks at d/2, r < 0)"
+        )
+
+
+class StribeckFriction(Effect):
+    """Driven-side breakaway friction falling to the Coulomb level with speed
+    (eq. 11.1). Fitted as the excess over the Coulomb friction, so that the
+    C core's rule F_brk >= F_C holds for any parameter vector; the Coulomb
+    friction is fitted with it (its own parameter when the model has none)."""
+
+    name = "stribeck_friction"
+    summary = (
+        "Stribeck friction: breakaway above the Coulomb level, falling with speed "
+        "(rig load_breakaway_friction, load_stribeck_speed)"
+    )
+    signature_text = (
+        "residual times sign(speed) peaks at low speed and decays with speed to a constant level"
+    )
+    n_params = 3
+    excitation = "hold at several low speeds"
+    separated_from = {
+        "coulomb_friction": "hold at several low speeds (the Stribeck hump falls with speed, "
+        "Coulomb friction does not)",
+        "viscous_friction": "hold at several low speeds and at one high speed",
+    }
+
+    def unavailable(self, model: Any) -> str | None:
+        return _rig_has(model, "load_breakaway_friction")
+
+    def present(self, model: Any) -> bool:
+        return float(mk.rig_values(model).get("load_breakaway_friction", 0.0)) > 0.0
+
+    def profile(self, ctx: Any) -> Any:
+        from .signatures import speed_profile
+
+        return speed_profile(ctx.r_d, ctx.v)
+
+    def _column(self, ctx: Any, vs: float) -> np.ndarray:
+        return ctx.columns["sign"] * np.exp(-((ctx.v / max(vs, 1e-12)) ** 2))
+
+    def _own(self, ctx: Any, vs: float) -> list[Column]:
+        cols = [("stribeck", self._column(ctx, vs), (0.0, np.inf))]
+        if not CoulombFriction().present(ctx.model):
+            cols.append(("sign", ctx.columns["sign"], (0.0, np.inf)))
+        return cols
+
+    def screen(self, ctx: Any) -> Any:
+        """The profile's Stribeck speed, and the screening regression with
+        the hump's column at that speed and at 1/3 and 3 times it (the best
+        one kept): the profile is coarse at the lowest speeds."""
+        from .signatures import screen
+
+        prof = self.profile(ctx)
+        vs0 = prof.stribeck_speed if prof.stribeck_speed > 0 else 0.05 * _speed_scale(ctx)
+        best = None
+        for vs in (vs0 / 3.0, vs0, 3.0 * vs0):
+            sr = screen(ctx, nuisance_columns(ctx, self), self._own(ctx, vs))
+            if best is None or sr.nrmse < best.nrmse:
+                best, best_vs = sr, vs
+        best.stribeck_speed = best_vs
+        best.profile = prof
+        return best
+
+    def parameters(self, ctx: Any, screen: Any) -> list[FitParam]:
+        rig = mk.rig_values(ctx.model)
+        unit = _force_unit(ctx.model)
+        vunit = "rad/s" if mk.block_name(ctx.model) == "simple_gear" else "m/s"
+        vmax = _speed_scale(ctx)
+        vs = float(getattr(screen, "stribeck_speed", 0.0) or 0.05 * vmax)
+        excess = max(_seed(screen, "stribeck", 0.0), 0.0)
+        hi = max(5.0 * _force_scale(ctx), 10.0 * excess)
+        out = [
+            FitParam("breakaway_excess", excess, 0.0, hi, unit, owner=self.name),
+            FitParam(
+                "load_stribeck_speed",
+                vs,
+                1e-4 * vmax,
+                vmax,
+                vunit,
+                before=float(rig.get("load_stribeck_speed", 0.01)),
+                owner=self.name,
+                grid=(0.3, 1.0, 3.0),
+            ),
+        ]
+        if not CoulombFriction().present(ctx.model):
+            fc = max(_seed(screen, "sign", 0.0), 0.0)
+            out.append(
+                FitParam(
+                    "load_coulomb_friction", fc, 0.0, hi, unit, before=0.0, owner="coulomb_friction"
+                )
+            )
+        return out
+
+    def build(self, ctx: Any, values: dict[str, float]) -> Changes:
+        if "breakaway_excess" not in values:
+            return {}, {}
+        fc = float(
+            values.get("load_coulomb_friction", mk.rig_values(ctx.model)["load_coulomb_friction"])
+        )
+        rig = {
+            "load_breakaway_friction": fc + float(values["breakaway_excess"]),
+            "load_stribeck_speed": float(values["load_stribeck_speed"]),
+        }
+        if "load_coulomb_friction" in values:
+            rig["load_coulomb_friction"] = fc
+        return {}, rig
+
+    def report(self, model: Any) -> dict[str, Any]:
+        rig = mk.rig_values(model)
+        keys = ("load_breakaway_friction", "load_stribeck_speed", "load_coulomb_friction")
+        return {k: rig[k] for k in keys}
+
+    def coestimated(self, ctx: Any, screen: Any) -> list[FitParam]:
+        rig = mk.rig_values(ctx.model)
+        fc = float(rig["load_coulomb_friction"])
+        vs = float(rig["load_stribeck_speed"])
+        ex = float(rig["load_breakaway_friction"]) - fc
+        hi = max(5.0 * _force_scale(ctx), 10.0 * ex)
+        return [
+            FitParam(
+                "breakaway_excess",
+                ex,
+                0.0,
+                hi,
+                _force_unit(ctx.model),
+                "coestimated",
+                ex,
+                self.name,
+            ),
+            FitParam(
+                "load_stribeck_speed",
+                vs,
+                min(1e-4 * _speed_scale(ctx), vs),
+                max(_speed_scale(ctx), vs),
+                role="coestimated",
+                before=vs,
+                owner=self.name,
+            ),
+        ]
+
+    def nuisance_columns(self, ctx: Any) -> list[Column]:
+        rig = mk.rig_values(ctx.model)
+        ex = float(rig["load_breakaway_friction"]) - float(rig["load_coulomb_friction"])
+        col = self._column(ctx, float(rig["load_stribeck_speed"]))
+        return [("stribeck", col, (-ex, np.inf))]
+
+    def evidence_extra(self, ctx: Any, screen: Any, own: dict[str, float]) -> dict[str, Any]:
+        prof = getattr(screen, "profile", None) or self.profile(ctx)
+        return {
+            "profile_coulomb": prof.coulomb,
+            "profile_excess": prof.excess,
+            "stribeck_speed": getattr(screen, "stribeck_speed", prof.stribeck_speed),
+        }
+
+    def describe(self, ctx, screen, own, r, regime) -> str:
+        vs = float(getattr(screen, "stribeck_speed", 0.0))
+        fu, vu = ctx.meas.spec.driven_force_unit, ctx.meas.spec.driven_speed_unit
+        return (
+            f"the friction level seen in the residual falls with speed (r = {r:.2f}): "
+            f"{_fmt(own.get('stribeck', 0.0))} {fu} above the level in motion near rest, "
+            f"decaying over ~{_fmt(vs)} {vu}; largest in {regime}"
+        )
+
+    def plot(self, ctx: Any, ax: Any) -> None:
+        prof = self.profile(ctx)
+        if prof.speed.size == 0:
+            return
+        ax.semilogx(prof.speed, prof.level, "o", ms=3, label="residual x sign(speed), binned")
+        u = np.geomspace(prof.speed[0], prof.speed[-1], 200)
+        if prof.stribeck_speed > 0:
+            curve = prof.coulomb + prof.excess * np.exp(-((u / prof.stribeck_speed) ** 2))
+            ax.semilogx(u, curve, "C3-", lw=1, label="Stribeck curve through the bins")
+        ax.set_xlabel(f"|driven speed| ({ctx.meas.spec.driven_speed_unit})")
+        ax.set_ylabel(f"friction level ({ctx.meas.spec.driven_force_unit})")
+        ax.set_title("stribeck_friction: residual against speed")
+        ax.legend(fontsize=7)
+
+
+class Compliance(Effect):
+    """A torsional spring-damper between the drive and the base gear, which
+    turns with base_inertia (eq. 11.2-11.4). The rigid model's residual then
+    rings at the shaft's natural frequency: a peak in its spectrum, which
+    seeds the stiffness through omega_n^2 = k / J_eff."""
+
+    name = "compliance"
+    summary = (
+        "compliant base shaft: torsional stiffness and damping between the drive and the base "
+        "gear (rig compliance_stiffness, compliance_damping; base_inertia given or set)"
+    )
+    signature_text = (
+        "residual power at a resonance: a peak in the residual spectrum, ringing after steps"
+    )
+    n_params = 2
+    excitation = "steps of acceleration (the shaft rings after each)"
+    separated_from = {
+        "inertia": "steps of acceleration: the shaft rings after a step, an inertia error does not",
+        "viscous_friction": "steps of acceleration between two held speeds",
+    }
+    internal_excitation = "steps of acceleration of several sizes"
+    #: a spectral peak less prominent than this (peak / median of the band)
+    #: is no resonance: screening rules the effect out
+    MIN_PROMINENCE = 8.0
+    #: the base inertia seeded, as a fraction of the driven inertia seen at the base
+    BASE_INERTIA_SEED = 0.2
+
+    def unavailable(self, model: Any) -> str | None:
+        why = _rig_has(model, "compliance_stiffness")
+        if why:
+            return why
+        if mk.rig_values(model).get("base_drive", "speed") != "speed":
+            return "a compliant shaft needs a speed-driven base"
+        if mk.block_values(model).get("backlash_enabled", False):
+            return "a compliant shaft needs a rigid mesh (the model has backlash)"
+        return None
+
+    def present(self, model: Any) -> bool:
+        return float(mk.rig_values(model).get("compliance_stiffness", 0.0)) > 0.0
+
+    def screen(self, ctx: Any) -> Any:
+        from .signatures import resonance
+
+        res = resonance(ctx.residual[ctx.torque_output], ctx.meas.dt)
+        tn = ctx.base_nrmse[ctx.torque_output]
+        left = tn * np.sqrt(max(1.0 - res.band_share, 0.0)) if res.prominence else tn
+        res.predicted_nrmse = ctx.overall_nrmse(left)
+        return res
+
+    def ruled_out(self, ctx: Any, screen: Any) -> str | None:
+        if np.isfinite(screen.peak_hz) and screen.prominence >= self.MIN_PROMINENCE:
+            return None
+        return (
+            f"the residual spectrum has no resonance peak (strongest {screen.prominence:.1f}x "
+            f"its band's median, {self.MIN_PROMINENCE:g}x needed)"
+        )
+
+    def predicted_nrmse(self, ctx: Any, screen: Any) -> float:
+        return float(screen.predicted_nrmse)
+
+    @staticmethod
+    def reflected_inertia(model: Any) -> float:
+        """The driven inertia seen at the base shaft, a^2 J_F (kg*m^2)."""
+        j = float(mk.rig_values(model)[mk.driven_inertia_key(model)])
+        return mk.kinematic_ratio(model) ** 2 * j
+
+    def base_inertia(self, ctx: Any) -> float:
+        """The base gear's inertia: given (rig base_inertia > 0), else
+        BASE_INERTIA_SEED of the driven inertia seen at the base. Only the sum
+        J_B + k^2 J_driven is seen on a speed-driven rig (eq. 11.3-11.4: the
+        shaft torque accelerates both alike), so it is not fitted: the
+        co-estimated driven inertia takes the rest."""
+        given = float(mk.rig_values(ctx.model).get("base_inertia", 0.0))
+        return given if given > 0 else self.BASE_INERTIA_SEED * self.reflected_inertia(ctx.model)
+
+    def parameters(self, ctx: Any, screen: Any) -> list[FitParam]:
+        # fitted as the natural frequency and damping ratio of eq. 11.4: the
+        # stiffness alone trades off with the co-estimated inertia (both
+        # move the frequency), the frequency does not
+        f0 = float(getattr(screen, "peak_hz", float("nan")))
+        if not np.isfinite(f0) or f0 <= 0:
+            f0 = 0.05 / ctx.meas.dt
+        zeta = getattr(screen, "damping_ratio", float("nan"))
+        zeta = float(zeta) if np.isfinite(zeta) else 0.05
+        o = self.name
+        return [
+            FitParam(
+                "compliance_natural_frequency",
+                f0,
+                0.2 * f0,
+                min(5.0 * f0, 0.5 / ctx.meas.dt),
+                "Hz",
+                owner=o,
+                # a lightly damped ring runs through many cycles: a 1 %
+                # frequency error turns its phase around, so look close first
+                grid=(0.98, 0.99, 1.0, 1.01, 1.02),
+                diff_step=1e-5,
+            ),
+            FitParam(
+                "compliance_damping_ratio",
+                min(max(zeta, 0.005), 0.5),
+                0.0,
+                2.0,
+                "",
+                owner=o,
+                diff_step=1e-4,
+            ),
+        ]
+
+    def _effective_inertia(self, ctx: Any, values: dict[str, float]) -> float:
+        key = mk.driven_inertia_key(ctx.model)
+        j = float(values.get(key, mk.rig_values(ctx.model)[key]))
+        return self.base_inertia(ctx) + mk.kinematic_ratio(ctx.model) ** 2 * j
+
+    def build(self, ctx: Any, values: dict[str, float]) -> Changes:
+        if "compliance_natural_frequency" in values:
+            wn = 2.0 * np.pi * float(values["compliance_natural_frequency"])
+            zeta = float(values["compliance_damping_ratio"])
+        elif "compliance_stiffness" in values:  # present, re-estimated
+            k, c = float(values["compliance_stiffness"]), float(values["compliance_damping"])
+            return {}, {"compliance_stiffness": k, "compliance_damping": c}
+        else:
+            return {}, {}
+        j = self._effective_inertia(ctx, values)
+        k = wn**2 * j
+        return {}, {
+            "compliance_stiffness": k,
+            "compliance_damping": 2.0 * zeta * np.sqrt(k * j),
+            "base_inertia": self.base_inertia(ctx),
+        }
+
+    def notes(self, model: Any) -> list[str]:
+        return [
+            "on a speed-driven rig only the sum base_inertia + (driven speed / base speed)^2 x "
+            "driven inertia is seen; base_inertia is kept (given, or "
+            f"{self.BASE_INERTIA_SEED:g} of the driven inertia seen at the base) and the driven "
+            "inertia takes the rest"
+        ]
+
+    def report(self, model: Any) -> dict[str, Any]:
+        rig = mk.rig_values(model)
+        out = {k: rig[k] for k in ("compliance_stiffness", "compliance_damping", "base_inertia")}
+        j = float(rig["base_inertia"]) + self.reflected_inertia(model)
+        k = float(rig["compliance_stiffness"])
+        if k > 0 and j > 0:
+            out["natural_frequency_hz"] = float(np.sqrt(k / j) / (2.0 * np.pi))
+        return out
+
+    def coestimated(self, ctx: Any, screen: Any) -> list[FitParam]:
+        rig = mk.rig_values(ctx.model)
+        out = []
+        for key, unit in (("compliance_stiffness", "N*m/rad"), ("compliance_damping", "N*m*s/rad")):
+            now = float(rig[key])
+            lo, hi = (1e-2 * now, 1e2 * now) if now > 0 else (0.0, 1.0)
+            out.append(
+                FitParam(key, now, lo, hi, unit, "coestimated", now, self.name, diff_step=1e-4)
+            )
+        return out
+
+    def evidence(self, ctx: Any, res: Any) -> dict[str, Any]:
+        return {
+            "signature": self.signature_text,
+            "peak_hz": res.peak_hz,
+            "prominence": res.prominence,
+            "damping_ratio": res.damping_ratio,
+            "band_share": res.band_share,
+            "regime": None,
+            "text": (
+                f"the torque residual's spectrum peaks at {res.peak_hz:.1f} Hz, "
+                f"{res.prominence:.1f}x its band's median, holding {100 * res.band_share:.0f} % "
+                "of the residual power: a resonance a rigid shaft cannot ring at"
+            ),
+        }
+
+    def plot(self, ctx: Any, ax: Any) -> None:
+        from .signatures import resonance
+
+        res = resonance(ctx.residual[ctx.torque_output], ctx.meas.dt)
+        ax.semilogy(res.freq_hz[1:], res.psd[1:], lw=1)
+        if np.isfinite(res.peak_hz):
+            ax.axvline(res.peak_hz, color="C3", ls="--", lw=1)
+        ax.set_xlabel("frequency (Hz)")
+        ax.set_ylabel("residual power density")
+        ax.set_title(f"compliance: residual spectrum, peak {res.peak_hz:.1f} Hz")
+
+
+#: (model key prefix, index, order factor) of the four ripple harmonics: the
+#: per-revolution ones turn at i*theta, the per-tooth ones at j*Z*theta
+_RIPPLE_TERMS = (
+    ("revolution", 0, 1),
+    ("revolution", 1, 2),
+    ("mesh", 0, 1),
+    ("mesh", 1, 2),
+)
+
+
+class TorqueRipple(Effect):
+    """A base-side torque periodic in the base-shaft angle, per revolution
+    and per tooth mesh (eq. 11.5). Its signature is linear: the residual's
+    harmonic regression on cos/sin of i*theta and j*Z*theta. The harmonics
+    fitted are those the regression finds above 4 standard errors (at least
+    the strongest), each with its amplitude and phase."""
+
+    name = "torque_ripple"
+    summary = (
+        "torque ripple on the base side, per revolution and per tooth mesh (rig ripple_* keys)"
+    )
+    signature_text = "residual periodic in the base-shaft angle (per revolution or per tooth)"
+    n_params = 2
+    excitation = "turn several revolutions at constant speed"
+    separated_from = {
+        "noise": "turn several revolutions at constant speed",
+    }
+    #: harmonics whose amplitude stays under this many standard errors are not fitted
+    SIGNIFICANCE = 4.0
+
+    @staticmethod
+    def teeth(model: Any) -> int:
+        """The teeth count of the base gear / pinion: given (rig
+        ripple_mesh_teeth) or the rack's teeth_count; 0 when unknown."""
+        z = int(mk.rig_values(model).get("ripple_mesh_teeth", 0) or 0)
+        if z > 0:
+            return z
+        blk = mk.block_values(model)
+        if blk.get("parameterization") == "tooth_parameters":
+            return int(round(float(blk.get("teeth_count", 0))))
+        return 0
+
+    def unavailable(self, model: Any) -> str | None:
+        why = _rig_has(model, "ripple_mesh_teeth")
+        if why:
+            return why
+        if self.teeth(model) < 1:
+            return (
+                "the teeth count of the base gear (pinion) is unknown: give it as [rig] "
+                "ripple_mesh_teeth"
+            )
+        return None
+
+    def present(self, model: Any) -> bool:
+        rig = mk.rig_values(model)
+        amps = list(rig.get("ripple_revolution_amplitude", [0, 0])) + list(
+            rig.get("ripple_mesh_amplitude", [0, 0])
+        )
+        return any(float(a) > 0 for a in amps)
+
+    def theta(self, ctx: Any) -> np.ndarray:
+        from .signatures import base_angle
+
+        return _cached(ctx, "base_angle", lambda: base_angle(ctx.inputs.base_speed, ctx.meas.dt))
+
+    def orders(self, model: Any) -> list[float]:
+        z = self.teeth(model)
+        return [float(k if kind == "revolution" else k * z) for kind, _, k in _RIPPLE_TERMS]
+
+    def harmonics(self, ctx: Any) -> Any:
+        from .signatures import angle_harmonics
+
+        return angle_harmonics(
+            ctx.residual[ctx.torque_output], self.theta(ctx), tuple(self.orders(ctx.model))
+        )
+
+    def selected(self, harmonics: Any) -> list[int]:
+        """Indices into _RIPPLE_TERMS of the harmonics worth fitting."""
+        keep = [i for i, h in enumerate(harmonics) if h.amplitude > self.SIGNIFICANCE * h.std_error]
+        return keep or [int(np.argmax([h.amplitude for h in harmonics]))]
+
+    def columns(self, ctx: Any) -> list[Column]:
+        # the ripple adds to the drive torque: in driven units, divided by kin
+        th = self.theta(ctx)
+        cols = []
+        for (kind, i, _), k in zip(_RIPPLE_TERMS, self.orders(ctx.model), strict=True):
+            cols += [
+                (f"{kind}{i}_cos", np.cos(k * th) / ctx.kin, (-np.inf, np.inf)),
+                (f"{kind}{i}_sin", np.sin(k * th) / ctx.kin, (-np.inf, np.inf)),
+            ]
+        return cols
+
+    def screen(self, ctx: Any) -> Any:
+        sr = super().screen(ctx)
+        sr.harmonics = self.harmonics(ctx)
+        return sr
+
+    def parameters(self, ctx: Any, screen: Any) -> list[FitParam]:
+        harm = getattr(screen, "harmonics", None) or self.harmonics(ctx)
+        amp_hi = 5.0 * _robust(ctx.meas[ctx.torque_output]) or 1.0
+        out = []
+        for t in self.selected(harm):
+            kind, i, _ = _RIPPLE_TERMS[t]
+            h = harm[t]
+            out += [
+                FitParam(
+                    f"ripple_{kind}_amplitude[{i}]",
+                    h.amplitude,
+                    0.0,
+                    amp_hi,
+                    "N*m",
+                    owner=self.name,
+                ),
+                FitParam(
+                    f"ripple_{kind}_phase[{i}]",
+                    h.phase,
+                    -2 * np.pi,
+                    2 * np.pi,
+                    "rad",
+                    owner=self.name,
+                    diff_step=1e-4,
+                ),
+            ]
+        return out
+
+    def build(self, ctx: Any, values: dict[str, float]) -> Changes:
+        rig_now = mk.rig_values(ctx.model)
+        rig: dict[str, Any] = {}
+        for kind in ("revolution", "mesh"):
+            for part in ("amplitude", "phase"):
+                key = f"ripple_{kind}_{part}"
+                pair = [float(x) for x in rig_now.get(key, [0.0, 0.0])]
+                for i in (0, 1):
+                    name = f"{key}[{i}]"
+                    if name in values:
+                        pair[i] = float(values[name])
+                        rig[key] = pair
+        if rig:
+            rig["ripple_mesh_teeth"] = self.teeth(ctx.model)
+        return {}, rig
+
+    def report(self, model: Any) -> dict[str, Any]:
+        rig = mk.rig_values(model)
+        keys = [f"ripple_{k}_{p}" for k in ("revolution", "mesh") for p in ("amplitude", "phase")]
+        return {**{k: list(rig[k]) for k in keys}, "ripple_mesh_teeth": rig["ripple_mesh_teeth"]}
+
+    def coestimated(self, ctx: Any, screen: Any) -> list[FitParam]:
+        rig = mk.rig_values(ctx.model)
+        amp_hi = 5.0 * _robust(ctx.meas[ctx.torque_output]) or 1.0
+        out = []
+        for kind, i, _ in _RIPPLE_TERMS:
+            amp = float(rig[f"ripple_{kind}_amplitude"][i])
+            if amp <= 0:
+                continue
+            ph = float(rig[f"ripple_{kind}_phase"][i])
+            out += [
+                FitParam(
+                    f"ripple_{kind}_amplitude[{i}]",
+                    amp,
+                    0.0,
+                    max(amp_hi, 2 * amp),
+                    "N*m",
+                    "coestimated",
+                    amp,
+                    self.name,
+                ),
+                FitParam(
+                    f"ripple_{kind}_phase[{i}]",
+                    ph,
+                    ph - 2 * np.pi,
+                    ph + 2 * np.pi,
+                    "rad",
+                    "coestimated",
+                    ph,
+                    self.name,
+                    diff_step=1e-4,
+                ),
+            ]
+        return out
+
+    def nuisance_columns(self, ctx: Any) -> list[Column]:
+        return self.columns(ctx)
+
+    def evidence_extra(self, ctx: Any, screen: Any, own: dict[str, float]) -> dict[str, Any]:
+        harm = getattr(screen, "harmonics", None) or self.harmonics(ctx)
+        return {
+            "teeth": self.teeth(ctx.model),
+            "harmonics": [
+                {
+                    "order": h.order,
+                    "amplitude": h.amplitude,
+                    "phase": h.phase,
+                    "std_error": h.std_error,
+                }
+                for h in harm
+            ],
+        }
+
+    def describe(self, ctx, screen, own, r, regime) -> str:
+        harm = getattr(screen, "harmonics", None) or self.harmonics(ctx)
+        parts = [
+            f"{_fmt(h.amplitude)} N*m at {h.order:g}/rev"
+            for h in harm
+            if h.amplitude > self.SIGNIFICANCE * h.std_error
+        ]
+        shown = ", ".join(parts) or "no harmonic above the noise"
+        return (
+            f"the torque residual repeats with the base-shaft angle (r = {r:.2f}): {shown} "
+            f"(Z = {self.teeth(ctx.model)} teeth); largest in {regime}"
+        )
+
+    def plot(self, ctx: Any, ax: Any) -> None:
+        th = np.mod(self.theta(ctx), 2 * np.pi)
+        r = ctx.residual[ctx.torque_output]
+        z = self.teeth(ctx.model)
+        bins = 72
+        for angle, label in (
+            (th, "per revolution"),
+            (np.mod(z * self.theta(ctx), 2 * np.pi), f"per tooth (Z = {z})"),
+        ):
+            which = np.minimum((angle / (2 * np.pi) * bins).astype(int), bins - 1)
+            cnt = np.bincount(which, minlength=bins)
+            mean = np.bincount(which, weights=r, minlength=bins) / np.maximum(cnt, 1)
+            ax.plot((np.arange(bins) + 0.5) * 360.0 / bins, mean, lw=1, label=label)
+        ax.set_xlabel("angle (deg)")
+        ax.set_ylabel("mean torque residual (N*m)")
+        ax.set_title("torque_ripple: residual against base-shaft angle")
+        ax.legend(fontsize=7)
+
+
 def _as_coestimated(p: FitParam) -> FitParam:
     p.role = "coestimated"
     return p
@@ -956,6 +1718,10 @@ EFFECTS: dict[str, Effect] = {
         Backlash(),
         CoulombFriction(),
         LoadOffset(),
+        SensorDelay(),
+        StribeckFriction(),
+        Compliance(),
+        TorqueRipple(),
     )
 }
 #: The effects in the order they are offered (that of EFFECTS).
@@ -1026,21 +1792,36 @@ def nuisance_columns(ctx: Any, effect: Effect | None) -> list[Column]:
     return cols
 
 
-def build_changes(ctx: Any, effect: Effect, values: dict[str, float]) -> Changes:
-    """Block and rig changes for effect + co-estimated parameter values."""
+def three_changes(changes: tuple) -> tuple[dict, dict, dict]:
+    """(block, rig, analysis) from what Effect.build returns: (block, rig),
+    or (block, rig, analysis) for an effect that sets an [analysis] key."""
+    if len(changes) == 2:
+        return dict(changes[0]), dict(changes[1]), {}
+    return dict(changes[0]), dict(changes[1]), dict(changes[2])
+
+
+def apply_changes(model: Any, changes: tuple) -> Any:
+    """model with the changes of Effect.build (2- or 3-tuple) applied."""
+    block, rig, analysis = three_changes(changes)
+    return mk.changed(model, block, rig, analysis)
+
+
+def build_changes(
+    ctx: Any, effect: Effect, values: dict[str, float]
+) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
+    """Block, rig and [analysis] changes for effect + co-estimated parameter values."""
     block: dict[str, Any] = {}
     rig: dict[str, Any] = {}
+    analysis: dict[str, Any] = {}
     key = mk.driven_inertia_key(ctx.model)
     if key in values:
         rig[key] = float(values[key])
-    for other in _present_others(ctx.model, effect):
-        b, r = other.build(ctx, values)
+    for builder in [*_present_others(ctx.model, effect), effect]:
+        b, r, a = three_changes(builder.build(ctx, values))
         block.update(b)
         rig.update(r)
-    b, r = effect.build(ctx, values)
-    block.update(b)
-    rig.update(r)
-    return block, rig
+        analysis.update(a)
+    return block, rig, analysis
 
 
 # ---------------------------------------------------------------- separation

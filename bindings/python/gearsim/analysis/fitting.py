@@ -186,8 +186,8 @@ class _Problem:
 
     def model_for(self, x: np.ndarray) -> Any:
         values = dict(zip(self.names, (float(v) for v in x), strict=True))
-        block, rig = build_changes(self.ctx, self.effect, values)
-        return mk.changed(self.ctx.model, block, rig)
+        block, rig, analysis = build_changes(self.ctx, self.effect, values)
+        return mk.changed(self.ctx.model, block, rig, analysis)
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
         from ..errors import GearsimError
@@ -402,6 +402,9 @@ def fit_effect(
     res = _multi_start(prob, x0, max_nfev or 30 * (len(params) + 1))
     std, corr, warns = _uncertainty(prob, res)
     new_model = prob.model_for(res.x)
+    too_small = effect.negligible(ctx, new_model)
+    if too_small:
+        warns.append(warning("negligible", f"{effect.name}: {too_small}", effects=[effect.name]))
     out = _outcome(ctx, effect, new_model, split, warns)
     return FitResult(
         effect=effect.name,

@@ -12,7 +12,9 @@ one separates them. Kinds:
   (from the Jacobian at the solution, cov ~ (J^T J)^-1);
 - ``at_bound``: a parameter ended at a bound of its range;
 - ``tie``: two effects explain the data equally (scoring.within_noise);
-- ``singular``, ``not_converged``, ``no_gain``: the fit itself.
+- ``singular``, ``not_converged``, ``no_gain``: the fit itself;
+- ``negligible``: the effect as fitted is below what the record can claim
+  (Effect.negligible; such a candidate does not help).
 """
 
 from __future__ import annotations

@@ -9,8 +9,13 @@ here.
 from __future__ import annotations
 
 import math
+import tomllib
 from collections.abc import Mapping
+from os import PathLike
+from pathlib import Path
 from typing import Any
+
+from ..model import Model
 
 __all__ = [
     "block_name",
@@ -22,7 +27,141 @@ __all__ = [
     "friction_model",
     "driven_inertia_key",
     "viscous_value",
+    "AnalysisModel",
+    "ANALYSIS_KEYS",
+    "load_model",
+    "torque_delay",
 ]
+
+#: Keys of the model file's [analysis] table: what the analysis applies to
+#: the simulated outputs before comparing them (no C rig parameter).
+#: torque_delay: s, how much the measured torque lags the speed channels.
+ANALYSIS_KEYS = {"torque_delay": "s"}
+#: A delay longer than this (s) is refused: a logger lag is milliseconds, a
+#: second would be a misread unit.
+MAX_TORQUE_DELAY = 1.0
+
+
+def _analysis_value(key: str, value: Any) -> float:
+    """An [analysis] value in SI: a number, or a unit string read with pint."""
+    from ..errors import ModelFileError
+    from ..units import UnitConversionError, to_si
+
+    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+        raise ModelFileError(f"[analysis] {key} must be a number or a unit string", parameter=key)
+    try:
+        x = float(to_si(value, ANALYSIS_KEYS[key])) if isinstance(value, str) else float(value)
+    except (UnitConversionError, TypeError) as exc:
+        raise ModelFileError(f"[analysis] {key}: {exc}", parameter=key) from None
+    if not (math.isfinite(x) and abs(x) <= MAX_TORQUE_DELAY):
+        raise ModelFileError(
+            f"[analysis] {key} = {x:g} s is outside [-{MAX_TORQUE_DELAY:g}, "
+            f"{MAX_TORQUE_DELAY:g}] s",
+            parameter=key,
+        )
+    return x
+
+
+class AnalysisModel(Model):
+    """A Model plus the analysis-only settings of the model file's
+    ``[analysis]`` table (:data:`ANALYSIS_KEYS`), e.g. ``torque_delay = "6 ms"``.
+    They change how the simulated outputs are compared, not the C rig, so
+    they live here and not in gearsim.Model; everything else is the Model's."""
+
+    def __init__(
+        self,
+        block: str = "simple_gear",
+        block_params: Mapping[str, Any] | None = None,
+        rig_params: Mapping[str, Any] | None = None,
+        *,
+        file: str | PathLike[str] | None = None,
+        analysis: Mapping[str, Any] | None = None,
+    ) -> None:
+        super().__init__(block, block_params, rig_params, file=file)
+        from ..errors import GearsimError, ModelFileError, with_file
+
+        self.analysis: dict[str, float] = {}
+        try:
+            if analysis is not None and not isinstance(analysis, Mapping):
+                raise ModelFileError("analysis must be a table ([analysis])", parameter="analysis")
+            for key, value in (analysis or {}).items():
+                if key not in ANALYSIS_KEYS:
+                    raise ModelFileError(
+                        f"unknown [analysis] key {key!r}; known: {', '.join(ANALYSIS_KEYS)}",
+                        parameter=str(key),
+                    )
+                x = _analysis_value(key, value)
+                if x != 0.0:
+                    self.analysis[key] = x
+        except GearsimError as exc:
+            if file is None:
+                raise
+            raise with_file(exc, file) from None
+
+    @classmethod
+    def of(cls, model: Any, analysis: Mapping[str, Any] | None = None) -> AnalysisModel:
+        """model (a Model or an AnalysisModel) with its [analysis] settings
+        updated by `analysis` (a value of 0 or None removes the key)."""
+        merged = dict(getattr(model, "analysis", {}))
+        for key, value in (analysis or {}).items():
+            if value is None:
+                merged.pop(key, None)
+            else:
+                merged[key] = value
+        return cls(model.block, model.block_params, model.rig_params, analysis=merged)
+
+    def replace(self, *, block_params=None, rig_params=None) -> AnalysisModel:
+        new = super().replace(block_params=block_params, rig_params=rig_params)
+        return AnalysisModel.of(new, self.analysis)
+
+    def to_dict(self) -> dict[str, Any]:
+        out = super().to_dict()
+        if self.analysis:
+            out["analysis"] = dict(self.analysis)
+        return out
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], file: str | PathLike[str] | None = None):
+        rest = dict(data) if isinstance(data, Mapping) else data
+        analysis = rest.pop("analysis", None) if isinstance(rest, dict) else None
+        plain = Model.from_dict(rest, file=file)
+        return cls(plain.block, plain.block_params, plain.rig_params, file=file, analysis=analysis)
+
+    def _key(self) -> Any:
+        return (super()._key(), tuple(sorted(self.analysis.items())))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Model):
+            return NotImplemented
+        return self._key() == AnalysisModel.of(other)._key()
+
+    def __hash__(self) -> int:
+        return hash(self._key())
+
+    def __repr__(self) -> str:
+        return f"{super().__repr__()[:-1]}, analysis={self.analysis!r})"
+
+
+def load_model(path: str | PathLike[str]) -> AnalysisModel:
+    """Read a model file with its optional [analysis] table (exit-2 errors
+    name the file and key, like Model.load)."""
+    from ..errors import ModelFileError
+
+    try:
+        text = Path(path).read_bytes().decode("utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ModelFileError(f"cannot read the model file: {exc}", file=path) from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ModelFileError(f"TOML syntax: {exc}", file=path) from None
+    return AnalysisModel.from_dict(data, file=path)
+
+
+def torque_delay(model: Any) -> float:
+    """The delay (s) of the measured torque relative to the speed channels
+    that the model says to apply to its simulated torque (0: none)."""
+    return float(getattr(model, "analysis", {}).get("torque_delay", 0.0))
 
 
 def block_name(model: Any) -> str:
@@ -41,11 +180,19 @@ def rig_values(model: Any) -> dict[str, Any]:
 
 
 def changed(
-    model: Any, block: Mapping[str, Any] | None = None, rig: Mapping[str, Any] | None = None
+    model: Any,
+    block: Mapping[str, Any] | None = None,
+    rig: Mapping[str, Any] | None = None,
+    analysis: Mapping[str, Any] | None = None,
 ) -> Any:
-    """A new Model with some block and rig parameters changed (validated by
-    the C core: an invalid value raises gearsim.ParameterError)."""
-    return model.replace(block_params=dict(block or {}), rig_params=dict(rig or {}))
+    """A new model with some block, rig and [analysis] parameters changed
+    (block and rig validated by the C core: an invalid value raises
+    gearsim.ParameterError). Always an AnalysisModel, so that what the
+    analysis sets survives every later change."""
+    new = model.replace(block_params=dict(block or {}), rig_params=dict(rig or {}))
+    if analysis or not isinstance(new, AnalysisModel):
+        new = AnalysisModel.of(new, analysis)
+    return new
 
 
 def friction_model(model: Any) -> str:

@@ -10,7 +10,12 @@ Figures:
 - ``regimes.png``: error per regime, first and last round, with the failing
   threshold;
 - ``error_fall.png``: nrmse on the estimation and on the validation blocks
-  after each round of adding an effect.
+  after each round of adding an effect;
+- ``signatures.png``: the signature plot of each effect class that draws one
+  (Effect.plot: residual spectrum, residual against speed or angle, the
+  residual/derivative cross-correlation against lag), for the effects that
+  were added or among a diagnosis's first candidates or helped, drawn on the
+  residual of the round that diagnosed them.
 """
 
 from __future__ import annotations
@@ -36,7 +41,9 @@ from .simulate import prepare_inputs
 
 __all__ = ["Round", "run_rounds", "write_report", "FIGURES"]
 
-FIGURES = ("overlay", "residual", "residual_vs", "regimes", "error_fall")
+FIGURES = ("overlay", "residual", "residual_vs", "regimes", "error_fall", "signatures")
+#: a diagnosis's first SHOWN_CANDIDATES candidates get their signature plot
+SHOWN_CANDIDATES = 3
 MAX_POINTS = 20_000
 
 
@@ -334,12 +341,52 @@ def _fig_error_fall(plt, meas: Measurement, rounds: list[Round]):
     return fig
 
 
+def _signature_cases(rounds: list[Round]) -> list[tuple[Any, Any]]:
+    """(effect, context) of each effect to draw: the first round whose
+    diagnosis added it, listed it among its first candidates, or found
+    that it helps; drawn on that diagnosis's baseline residual."""
+    from .effects import EFFECTS
+
+    added = {r.effect for r in rounds if r.effect}
+    cases: dict[str, Any] = {}
+    for r in rounds:
+        d = r.diagnosis
+        if d is None:
+            continue
+        for i, c in enumerate(d.candidates):
+            eff = EFFECTS.get(c.effect)
+            if eff is None or eff.plot is None or c.effect in cases:
+                continue
+            if c.effect in added or c.helps or i < SHOWN_CANDIDATES:
+                cases[c.effect] = (eff, d.context)
+    return list(cases.values())
+
+
+def _fig_signatures(plt, meas: Measurement, rounds: list[Round]):
+    cases = _signature_cases(rounds)
+    cols = 2
+    rows = max(1, (len(cases) + cols - 1) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(11, 3.8 * rows), squeeze=False)
+    for ax in axes.ravel()[len(cases) :]:
+        ax.axis("off")
+    if not cases:
+        axes[0, 0].text(0.02, 0.5, "no candidate with a signature plot", fontsize=10)
+    for ax, (eff, ctx) in zip(axes.ravel(), cases, strict=False):
+        eff.plot(ctx, ax)
+        ax.grid(alpha=0.3)
+        ax.title.set_fontsize(9)
+    fig.suptitle("signatures of the effects diagnosed (on the residual of their round)")
+    fig.tight_layout()
+    return fig
+
+
 _DRAW = {
     "overlay": _fig_overlay,
     "residual": _fig_residual,
     "residual_vs": _fig_residual_vs,
     "regimes": _fig_regimes,
     "error_fall": _fig_error_fall,
+    "signatures": _fig_signatures,
 }
 
 
@@ -403,6 +450,9 @@ def _html(meas: Measurement, rounds: list[Round], images: dict[str, bytes], titl
     h.append(_img(images["residual"], "residual"))
     h.append(_img(images["regimes"], "regimes"))
     h.append(_img(images["residual_vs"], "residual signatures"))
+    if _signature_cases(rounds):
+        h.append("<h2>Signatures of the effects diagnosed</h2>")
+        h.append(_img(images["signatures"], "effect signatures"))
     for i, r in enumerate(rounds):
         if r.diagnosis is not None:
             h.append(_diagnosis_html(i, r.diagnosis))

@@ -35,7 +35,9 @@ are swapped until the one with fewer parameters comes first.
 
 **Stopping rule** (:func:`helps`, shared by diagnose and report): an effect
 helps when it was fitted, it lowers the validation error by at least
-``HELP_MARGIN`` (relative) and its score is lower than the baseline's.
+``HELP_MARGIN`` (relative), its score is lower than the baseline's, and its
+fit has no ``negligible`` warning (the effect class judged the fitted size
+below what the record can claim, e.g. a delay under 1.5 samples).
 """
 
 from __future__ import annotations
@@ -194,6 +196,8 @@ def helps(candidate: Any, baseline_validation_nrmse: float, baseline_score: floa
     """The one stopping rule of diagnose and report (module docstring)."""
     if candidate is None or candidate.method != "fit":
         return False
+    if any(w.get("kind") == "negligible" for w in getattr(candidate, "warnings", ())):
+        return False  # the effect says the record cannot claim it at the size fitted
     after = candidate.validation_nrmse_after
     if after is None or not np.isfinite(after):
         return False

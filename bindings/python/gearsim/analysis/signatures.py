@@ -401,3 +401,231 @@ def backlash_evidence(ctx: Context) -> BacklashEvidence:
     return BacklashEvidence(
         events, window, conc, frac, gap, pred, mask, ctx.speed_output, gap_range
     )
+
+
+# ---------------------------------------------------------------- signatures of issue 17
+#
+# The four effects beyond the seed blocks have signatures that are not (only)
+# columns of r_d; these functions compute what a person checks, on plain
+# arrays, so that each can be tested on a hand-made residual.
+
+
+def parabolic_peak(y: np.ndarray, i: int) -> tuple[float, float]:
+    """Sub-sample position and height of the extremum at index i of y: the
+    vertex of the parabola through y[i-1], y[i], y[i+1] (i itself at an end)."""
+    if i <= 0 or i >= y.size - 1:
+        return float(i), float(y[i])
+    a, b, c = float(y[i - 1]), float(y[i]), float(y[i + 1])
+    den = a - 2.0 * b + c
+    if den == 0.0:
+        return float(i), b
+    off = 0.5 * (a - c) / den
+    return i + off, b - 0.25 * (a - c) * off
+
+
+@dataclass
+class DelaySignature:
+    """Cross-correlation of the torque residual with the derivative of the
+    simulated torque.
+
+    lags_s: the lags (s); correlation: the normalised cross-correlation
+    sum r(t) y'(t - lag) / (|r| |y'|) at each lag; peak_lag_s: where its
+    magnitude peaks (sub-sample, parabolic interpolation); peak_r: its value
+    there; gain_s: the regression coefficient of r on y'(t - peak_lag).
+    A measured torque that lags the model by d gives r(t) = y(t - d) - y(t)
+    ~ -d y'(t - d/2): a peak at d/2 with gain -d, so delay_s = -gain_s."""
+
+    lags_s: np.ndarray
+    correlation: np.ndarray
+    peak_lag_s: float
+    peak_r: float
+    gain_s: float
+
+    @property
+    def delay_s(self) -> float:
+        return -self.gain_s
+
+
+def _xcorr(r: np.ndarray, d: np.ndarray, max_lag: int) -> np.ndarray:
+    """c[L + max_lag] = sum_k r[k] d[k - L] for L in -max_lag..max_lag (FFT)."""
+    n = r.size
+    size = 1 << int(np.ceil(np.log2(2 * n)))
+    full = np.fft.irfft(np.fft.rfft(r, size) * np.conj(np.fft.rfft(d, size)), size)
+    return np.concatenate([full[size - max_lag :], full[: max_lag + 1]])
+
+
+def delay_signature(
+    residual: np.ndarray, output: np.ndarray, dt: float, max_lag_s: float = 0.1
+) -> DelaySignature:
+    """The cross-correlation lag between a residual and the derivative of an
+    output (see DelaySignature). max_lag_s is cut to a quarter of the record."""
+    r = np.asarray(residual, dtype=float) - np.mean(residual)
+    d = np.gradient(np.asarray(output, dtype=float), dt)
+    d = d - d.mean()
+    m = int(max(1, min(round(max_lag_s / dt), r.size // 4)))
+    den = float(np.linalg.norm(r) * np.linalg.norm(d))
+    c = _xcorr(r, d, m) / den if den > 0 else np.zeros(2 * m + 1)
+    lags = np.arange(-m, m + 1) * dt
+    i = int(np.argmax(np.abs(c)))
+    pos, height = parabolic_peak(c, i)
+    peak_lag = (pos - m) * dt
+    from .simulate import delayed
+
+    shifted = delayed(d, peak_lag / dt)
+    ss = float(np.dot(shifted, shifted))
+    gain = float(np.dot(r, shifted) / ss) if ss > 0 else 0.0
+    return DelaySignature(lags, c, float(peak_lag), float(height), gain)
+
+
+@dataclass
+class SpeedProfile:
+    """The driven-side residual against |speed|: r_d * sgn(v) averaged in
+    log-spaced bins of |v| (a friction level per speed).
+
+    speed: bin centres (driven units); level: mean r_d*sgn(v) per bin;
+    count: samples per bin; coulomb / excess / stribeck_speed: the curve
+    level = coulomb + excess*exp(-(speed/stribeck_speed)^2) fitted to the
+    bins (weighted by their counts)."""
+
+    speed: np.ndarray
+    level: np.ndarray
+    count: np.ndarray
+    coulomb: float
+    excess: float
+    stribeck_speed: float
+
+
+def speed_profile(r_d: np.ndarray, v: np.ndarray, bins: int = 30) -> SpeedProfile:
+    """Binned r_d*sgn(v) against |v| and the Stribeck curve that fits it
+    best (grid over the Stribeck speed, linear least squares for the two
+    levels at each)."""
+    u = np.abs(np.asarray(v, dtype=float))
+    y = np.asarray(r_d, dtype=float) * np.sign(v)
+    vmax = float(np.percentile(u, 99)) if u.size else 0.0
+    if vmax <= 0:
+        return SpeedProfile(np.zeros(0), np.zeros(0), np.zeros(0), 0.0, 0.0, 0.0)
+    edges = np.geomspace(2e-3 * vmax, vmax, bins + 1)
+    which = np.digitize(u, edges) - 1
+    ok = (which >= 0) & (which < bins)
+    count = np.bincount(which[ok], minlength=bins).astype(float)
+    total = np.bincount(which[ok], weights=y[ok], minlength=bins)
+    keep = count >= 5
+    centre = np.sqrt(edges[:-1] * edges[1:])[keep]
+    level = total[keep] / count[keep]
+    w = np.sqrt(count[keep])
+    best = (np.inf, 0.0, 0.0, 0.0)
+    for vs in np.geomspace(edges[0], 0.5 * vmax, 60):
+        X = np.column_stack([np.ones_like(centre), np.exp(-((centre / vs) ** 2))])
+        coef, *_ = np.linalg.lstsq(X * w[:, None], level * w, rcond=None)
+        if coef[1] < 0:  # a friction that rises towards rest only
+            continue
+        sse = float(np.sum((w * (level - X @ coef)) ** 2))
+        if sse < best[0]:
+            best = (sse, float(coef[0]), float(coef[1]), float(vs))
+    return SpeedProfile(centre, level, count[keep], best[1], best[2], best[3])
+
+
+@dataclass
+class Resonance:
+    """The residual's power spectrum (Welch) and its strongest peak.
+
+    freq_hz, psd: the spectrum; peak_hz: the peak (parabolic interpolation
+    on log power); prominence: peak power / median power of the band
+    searched; damping_ratio: half the relative -3 dB width of the peak
+    (NaN when the peak is not resolved); band_share: share of the
+    residual's power within the peak's -3 dB band widened 2x."""
+
+    freq_hz: np.ndarray
+    psd: np.ndarray
+    peak_hz: float
+    prominence: float
+    damping_ratio: float
+    band_share: float
+
+
+def resonance(residual: np.ndarray, dt: float, min_hz: float | None = None) -> Resonance:
+    """Spectrum of a residual and its strongest peak above min_hz (default:
+    four frequency bins) and below 0.4/dt."""
+    from scipy.signal import welch
+
+    r = np.asarray(residual, dtype=float)
+    n = r.size
+    nper = int(min(n, max(256, 2 ** int(np.log2(max(n // 8, 2))))))
+    f, p = welch(r - r.mean(), fs=1.0 / dt, nperseg=nper, detrend="linear")
+    lo = 4.0 * f[1] if min_hz is None else max(min_hz, f[1])
+    band = (f >= lo) & (f <= 0.4 / dt)
+    if not band.any() or not np.any(p[band] > 0):
+        return Resonance(f, p, float("nan"), 0.0, float("nan"), 0.0)
+    idx = np.nonzero(band)[0]
+    i = int(idx[np.argmax(p[idx])])
+    logp = np.log(np.maximum(p, 1e-300))
+    pos, _ = parabolic_peak(logp, i)
+    df = f[1] - f[0]
+    peak_hz = float(f[0] + pos * df)
+    # prominence against the local floor: the median power over an octave on
+    # each side, the peak's own bins left out (a residual's broad low-frequency
+    # content is no resonance)
+    local = (f >= 0.5 * f[i]) & (f <= 2.0 * f[i]) & (np.abs(f - f[i]) > 3.0 * (f[1] - f[0]))
+    floor = np.median(p[local]) if local.any() else np.median(p[idx])
+    prominence = float(p[i] / max(floor, 1e-300))
+    # -3 dB width: walk down each side to half the peak power
+    half = 0.5 * p[i]
+    left = i
+    while left > 0 and p[left] > half:
+        left -= 1
+    right = i
+    while right < p.size - 1 and p[right] > half:
+        right += 1
+    width = (right - left) * df
+    zeta = float(0.5 * width / peak_hz) if right - left > 2 and peak_hz > 0 else float("nan")
+    wide = (f >= peak_hz - width) & (f <= peak_hz + width)
+    share = float(p[wide].sum() / p.sum()) if p.sum() > 0 else 0.0
+    return Resonance(f, p, peak_hz, prominence, zeta, share)
+
+
+@dataclass
+class Harmonic:
+    """One harmonic of a residual against an angle: residual ~
+    amplitude*cos(order*theta + phase); std_error: of the amplitude."""
+
+    order: float
+    amplitude: float
+    phase: float
+    std_error: float
+
+
+def angle_harmonics(
+    residual: np.ndarray, theta: np.ndarray, orders: tuple[float, ...]
+) -> list[Harmonic]:
+    """Harmonic regression of a residual on cos/sin(order*theta) for each
+    order (plus a constant), by least squares. A cos(k theta + phi) =
+    A cos(phi) cos(k theta) - A sin(phi) sin(k theta). The standard errors
+    use the effective sample count of the left-over residual (lag-1
+    autocorrelation), as the score does."""
+    from .scoring import effective_samples, lag1_autocorrelation
+
+    r = np.asarray(residual, dtype=float)
+    th = np.asarray(theta, dtype=float)
+    cols = [np.ones_like(th)]
+    for k in orders:
+        cols += [np.cos(k * th), np.sin(k * th)]
+    X = np.column_stack(cols)
+    coef, *_ = np.linalg.lstsq(X, r, rcond=None)
+    left = r - X @ coef
+    n_eff = effective_samples(r.size, lag1_autocorrelation(left))
+    sigma = float(np.std(left))
+    out = []
+    for j, k in enumerate(orders):
+        a, b = float(coef[1 + 2 * j]), float(coef[2 + 2 * j])
+        amp = float(np.hypot(a, b))
+        # each of a, b has a std of ~ sigma*sqrt(2/n) for a full-cycle cover
+        out.append(Harmonic(float(k), amp, float(np.arctan2(-b, a)), sigma * np.sqrt(2.0 / n_eff)))
+    return out
+
+
+def base_angle(speed: np.ndarray, dt: float) -> np.ndarray:
+    """The base-shaft angle (rad) at the middle of each step of a rig that
+    starts at angle 0 and holds each speed sample for one step (the rig's
+    evaluation angle of the ripple, docs/physics.md 11.5)."""
+    w = np.asarray(speed, dtype=float)
+    return dt * (np.cumsum(w) - 0.5 * w)

@@ -51,6 +51,7 @@ __all__ = [
     "Simulation",
     "simulate",
     "simulate_outputs",
+    "delayed",
 ]
 
 
@@ -251,7 +252,23 @@ def _run(model: Any, meas: Measurement, inputs: Inputs) -> tuple[Any, dict[str, 
             x = expand_to_rig_steps(x, steps, steps.before.get(col.name))
         kw[str(col.rig_input)] = x
     res = rig.run(**kw)
-    return res, {col.name: _per_row(res, str(col.rig_output), steps) for col in cols.outputs}
+    outputs = {col.name: _per_row(res, str(col.rig_output), steps) for col in cols.outputs}
+    delay = mk.torque_delay(model)
+    if delay:
+        torque = meas.spec.torque_output
+        outputs[torque] = delayed(outputs[torque], delay / meas.dt)
+    return res, outputs
+
+
+def delayed(y: np.ndarray, samples: float) -> np.ndarray:
+    """y delayed by a (fractional) number of samples: y(t - d) by linear
+    interpolation on the sample grid, the first value held before the start
+    (negative: advanced, the last value held). The [analysis] torque_delay
+    is applied this way to the simulated torque: positive means the measured
+    torque lags the speed channels, as a logger on a slower device does."""
+    y = np.asarray(y, dtype=float)
+    grid = np.arange(y.size, dtype=float)
+    return np.interp(grid - samples, grid, y)
 
 
 def _per_row(res: Any, name: str, steps: RigSteps | None) -> np.ndarray:
