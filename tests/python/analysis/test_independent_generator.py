@@ -1,8 +1,10 @@
 """The independent generator (tests/python/analysis/independent) checked on
 its own physics: settled torques against hand-derived values, the encoder's
-quantum, the noise floor, the compliant mesh's natural frequency. The expected
-numbers are worked out in the comments from the rig's constants, not taken
-from the generator or from gearsim."""
+quantum, the noise floor, the compliant mesh's natural frequency; and the
+effects beyond the seed blocks: a compliant shaft's ring, the breakaway load
+of a Stribeck friction, a torque ripple at constant speed, a delayed torque
+channel. The expected numbers are worked out in the comments from the rig's
+constants, not taken from the generator or from gearsim."""
 
 from __future__ import annotations
 
@@ -14,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from independent import RIGS, Losses, generate, simulate_true
+from independent import RIGS, Losses, generate, mechanism, simulate_true
 from independent import sensors as S
 
 DT = 1e-3
@@ -138,6 +140,155 @@ def test_compliant_mesh_rings_at_its_natural_frequency() -> None:
     crossings = np.nonzero(np.diff(np.sign(swing)) != 0)[0]
     periods = np.diff(crossings[::2]) * dt
     assert float(1.0 / np.median(periods)) == pytest.approx(expected_hz, rel=0.02)
+
+
+def _zero_crossing_hz(signal: np.ndarray, dt: float) -> float:
+    crossings = np.nonzero(np.diff(np.sign(signal)) != 0)[0]
+    return float(1.0 / np.median(np.diff(crossings[::2]) * dt))
+
+
+def test_compliant_shaft_rings_at_its_natural_frequency() -> None:
+    # the gear's shaft truth (k = 600 N*m/rad, c = 0.2 N*m*s/rad, base gear
+    # 0.001 kg*m^2) with the motor held (1000 kg*m^2, drive loop off), the
+    # mesh 100x stiffer (so rigid to 0.1 %) and a 1 N*m load step on the
+    # follower. With the motor held and a rigid mesh (physics.md 11.4):
+    # a = -1/3, J_eff = 0.001 + 0.05/9 = 0.0065556 kg*m^2,
+    # omega_n = sqrt(600/J_eff) = 302.53 rad/s = 48.15 Hz,
+    # zeta = 0.2/(2*sqrt(600*J_eff)) = 0.05042: each period the swing shrinks
+    # by exp(-2*pi*zeta/sqrt(1 - zeta^2)) = 0.7284;
+    # the shaft settles at the torque that holds the load, -a*L = 1/3 N*m.
+    mech = dataclasses.replace(
+        mechanism("simple_gear", ("compliance",)),
+        base_inertia=1e3,
+        drive_bandwidth_rad_s=1e-6,
+        mesh_stiffness_N_m=2e8,
+    )
+    dt = 1e-4
+    t = np.arange(3000) * dt
+    run = simulate_true(mech, t, np.zeros(t.size), np.full(t.size, 1.0), np.full(t.size, 300.0))
+    swing = run.base_torque - 1.0 / 3.0
+    assert _zero_crossing_hz(swing, dt) == pytest.approx(48.15, rel=0.01)
+    period = int(round(1.0 / 48.15 / dt))
+    peaks = [float(np.max(np.abs(swing[i * period : (i + 1) * period]))) for i in range(1, 8)]
+    decay = np.exp(np.mean(np.diff(np.log(peaks))))
+    assert decay == pytest.approx(0.7284, abs=0.02)
+    # settled at -a*L: the mean over the last whole periods
+    tail = swing[-10 * period :]
+    assert float(np.mean(tail)) == pytest.approx(0.0, abs=0.01 / 3)
+    # the encoder's shaft (the motor) practically stayed put: 1/3 N*m on
+    # 1000 kg*m^2 for 0.3 s is 1e-4 rad/s
+    assert float(np.max(np.abs(run.base_speed))) == pytest.approx(1e-4, rel=0.05)
+    assert run.gear_speed is not None and float(np.max(np.abs(run.gear_speed))) > 0.01
+
+
+def test_stribeck_friction_holds_below_breakaway_and_breaks_away_at_it() -> None:
+    # the rack's Stribeck truth (Coulomb 30 N, breakaway 60 N, v_S = 0.05 m/s)
+    # with the drive loop off and a load ramped by 100 N/s from rest. The
+    # generator's friction is (30 + 30*exp(-(v/v_S)^2))*tanh(v/v_c); with
+    # v_c = 1 mm/s (v_S/v_c = 50) its largest value over v is within 0.5 % of
+    # 60 N: at v = 3, 4 and 5 v_c, 0.9951*59.89 = 59.60 N,
+    # 0.99933*59.81 = 59.77 N and 0.99991*59.70 = 59.70 N. Below it the rack
+    # creeps inside the tanh band: at 0.9*60 N, tanh(v/v_c) <= 0.9 gives
+    # v <= 1.47 mm/s. Above it nothing holds the rack: the friction falls
+    # toward 30 N as it speeds up.
+    mech = dataclasses.replace(
+        mechanism("rack_pinion", ("coulomb_friction", "stribeck_friction")),
+        coulomb_speed=1e-3,
+        drive_bandwidth_rad_s=1e-6,
+    )
+    dt = 2e-4
+    t = np.arange(5000) * dt
+    load = 100.0 * t
+    run = simulate_true(mech, t, np.zeros(t.size), load, np.full(t.size, 300.0))
+    below = load < 0.9 * 60.0
+    assert float(np.max(np.abs(run.driven_speed[below]))) < 1.6e-3
+    # the creep reaches 3*v_c where the friction is 59.60 N: at that load
+    # (plus what accelerates the rack, ramped at 100 N/s)
+    broke = int(np.argmax(run.driven_speed > 3e-3))
+    assert load[broke] == pytest.approx(59.6, rel=0.015)
+    # and then slides away: 0.1 s later it is far beyond any creep (the net
+    # force grows from zero at the peak, so it starts slowly)
+    assert run.driven_speed[broke + int(0.1 / dt)] > 0.1
+
+
+def test_torque_ripple_seen_at_constant_speed() -> None:
+    # the gear's ripple truth, the base held at 10 rad/s (a 1000 kg*m^2 motor
+    # started at that speed, drive loop off) with no load and no loss: the
+    # mesh carries nothing, so the torque sensor reads the ripple alone,
+    # 0.08*cos(theta + 0.6) + 0.03*cos(2*theta - 1.1)
+    # + 0.05*cos(16*theta + 0.3) + 0.02*cos(32*theta + 2.0), theta = 10*t.
+    # A least-squares fit of cos/sin of each harmonic of 10*t over 2 s
+    # (3.2 revolutions) must give those amplitudes and phases.
+    mech = dataclasses.replace(
+        mechanism("simple_gear", ("torque_ripple",)), base_inertia=1e3, drive_bandwidth_rad_s=1e-6
+    )
+    t = np.arange(2000) * DT
+    run = simulate_true(mech, t, np.full(t.size, 10.0), np.zeros(t.size), np.full(t.size, 300.0))
+    theta = 10.0 * t
+    # the ripple barely moves the heavy motor: switched on at t = 0 it leaves
+    # a speed offset of about A_1*sin(phi_1)/(J*omega) = 4.5e-6 rad/s, 1e-5 rad
+    # over 2 s
+    assert float(np.max(np.abs(run.base_angle - theta))) < 2e-5
+    harmonics = (1, 2, 16, 32)
+    columns = [f(h * theta) for h in harmonics for f in (np.cos, np.sin)]
+    coef, *_ = np.linalg.lstsq(np.column_stack(columns), run.base_torque, rcond=None)
+    expected = {1: (0.08, 0.6), 2: (0.03, -1.1), 16: (0.05, 0.3), 32: (0.02, 2.0)}
+    for i, h in enumerate(harmonics):
+        # A*cos(x + phi) = A*cos(phi)*cos(x) - A*sin(phi)*sin(x)
+        c, s = coef[2 * i], coef[2 * i + 1]
+        amplitude, phase = expected[h]
+        assert math.hypot(c, s) == pytest.approx(amplitude, abs=1e-4), h
+        assert math.atan2(-s, c) == pytest.approx(phase, abs=2e-3), h
+
+
+def _correlation_peak(late: np.ndarray, early: np.ndarray, max_lag: int = 20) -> int:
+    """The whole-sample lag at which `early` shifted best matches `late`."""
+    a, b, n = late - np.mean(late), early - np.mean(early), late.size
+    corr = [
+        np.dot(a[max_lag + k : n - max_lag + k], b[max_lag : n - max_lag])
+        for k in range(-max_lag, max_lag + 1)
+    ]
+    return int(np.argmax(corr)) - max_lag
+
+
+def _phase_slope_lag(late: np.ndarray, early: np.ndarray, max_hz: float) -> float:
+    """The delay (samples) from the cross-spectrum: a pure delay tau turns
+    the phase of late*conj(early) into -omega*tau. Weighted least-squares
+    slope through zero below max_hz (Hann window against the record's ends).
+    A parabola through the correlation's peak would be biased: the torque's
+    autocorrelation has a cusp, not a parabola, at its top."""
+    window = np.hanning(late.size)
+    spec_late = np.fft.rfft((late - np.mean(late)) * window)
+    spec_early = np.fft.rfft((early - np.mean(early)) * window)
+    freq = np.fft.rfftfreq(late.size, DT)
+    band = (freq > 0) & (freq < max_hz)
+    cross = spec_late[band] * np.conj(spec_early[band])
+    omega, weight = 2 * np.pi * freq[band], np.abs(cross)
+    return float(-np.sum(weight * omega * np.angle(cross)) / np.sum(weight * omega**2) / DT)
+
+
+def test_torque_delay_is_the_cross_correlation_lag() -> None:
+    # sensor_delay: the torque logged 6.4 ms late (6.4 samples at 1 kHz), the
+    # speeds on time. The same record without the delay has the same motion
+    # and the same noise draws, so: the delayed torque's cross-correlation
+    # with the on-time one peaks at 6.4 samples; the speeds are unchanged;
+    # and a whole-sample reading of the fine grid is the on-time torque
+    # shifted by those samples.
+    late = generate("simple_gear", ("sensor_delay",))
+    on_time = generate("simple_gear", ())
+    true_late, true_on_time = late.true_outputs["base_torque"], on_time.true_run.base_torque
+    assert _correlation_peak(true_late, true_on_time) in (6, 7)
+    assert _phase_slope_lag(true_late, true_on_time, 20.0) == pytest.approx(6.4, abs=0.05)
+    # the measured torques share their noise draws at lag 0, which pulls the
+    # estimate toward 0 where noise dominates: the band below 10 Hz
+    measured = [r.measured_outputs["base_torque"] for r in (late, on_time)]
+    assert _phase_slope_lag(*measured, 10.0) == pytest.approx(6.4, abs=0.1)
+    np.testing.assert_array_equal(
+        late.measured_outputs["follower_speed"], on_time.measured_outputs["follower_speed"]
+    )
+    run = late.true_run
+    six = S.delayed_reading(run.fine_torque, run.fine_dt, run.time.size, DT, 6e-3)
+    np.testing.assert_allclose(six[6:], run.base_torque[:-6], rtol=0, atol=1e-9)
 
 
 def test_generator_never_loads_gearsim_core() -> None:

@@ -7,7 +7,10 @@ noise floor.
   sample.
 - The drive-torque sensor adds white noise and a constant offset; the load
   sensor white noise; the temperature probe white noise.
-- An optional delay (whole samples) on every channel but time.
+- An optional delay (whole samples) on every channel but time, and an
+  optional delay of the torque channel alone (any fraction of a sample: a
+  torque logged by another device than the speeds), read from the true
+  torque at the integrator's fine step.
 
 The noise floor is what a perfect model would still show: the nrmse of the
 true, noise-free outputs against the measured ones, rms(meas - true) / std(meas)
@@ -31,6 +34,7 @@ class Sensors:
     load_noise: float = 0.01  # std as a fraction of the true load's range
     temperature_noise_K: float = 0.1
     delay_samples: int = 0
+    torque_delay_s: float = 0.0  # s, how much the torque reading lags the speeds
 
 
 def robust_range(x: np.ndarray) -> float:
@@ -51,6 +55,15 @@ def delayed(x: np.ndarray, samples: int) -> np.ndarray:
     if samples <= 0:
         return x
     return np.concatenate([np.full(samples, x[0]), x[:-samples]])
+
+
+def delayed_reading(fine_signal: np.ndarray, fine_dt: float, n: int, dt: float, delay_s: float):
+    """The signal as a sensor that lags by delay_s reads it at the n sample
+    instants k*dt: the fine-step signal (spacing fine_dt, starting at 0) at
+    k*dt - delay_s, linear between fine steps; before the record starts, its
+    first value (the rig is at rest)."""
+    fine_time = np.arange(fine_signal.size) * fine_dt
+    return np.interp(np.arange(n) * dt - delay_s, fine_time, fine_signal)
 
 
 def nrmse(measured: np.ndarray, reference: np.ndarray) -> float:
