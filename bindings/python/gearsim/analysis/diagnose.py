@@ -7,10 +7,13 @@
    and gives the evidence. Screening rules an effect out only when the record
    cannot show it (backlash without concentrated driven-speed residual after
    reversals, a temperature dependence without a temperature span).
-3. fit: every candidate not ruled out (or the best ``top`` by screening) is
+3. fit: the best ALWAYS_FIT candidates not ruled out, the cheap ones (one
+   parameter, no contact) and every other one whose screening predicts a gain
+   of at least scoring.HELP_MARGIN (or the best ``top`` by screening), are
    added and fitted on the C simulation on the estimation blocks
-   (gearsim.analysis.fitting), which gives its errors on the whole record
-   and on the validation blocks.
+   (gearsim.analysis.fitting), which gives their errors on the whole record
+   and on the validation blocks. The others keep their screening estimate
+   (a note names them).
 4. rank: by the score of gearsim.analysis.scoring (a BIC on the estimation
    part with an effective sample count); fitted candidates first, screening
    estimates after them; within the noise, fewer parameters first.
@@ -38,6 +41,10 @@ from .simulate import Inputs, prepare_inputs
 __all__ = ["Candidate", "DiagnoseResult", "diagnose", "NOTHING_HELPS"]
 
 NOTHING_HELPS = "nothing left that helps"
+#: candidates fitted whatever screening predicts (the best few by screening)
+ALWAYS_FIT = 3
+#: a predicted relative gain below this: screening found no sign of the effect
+NO_SIGNATURE_GAIN = 1e-3
 
 
 @dataclass
@@ -186,6 +193,101 @@ def _screen_all(ctx: Context, effects: list[Effect], nuisance_nrmse: float) -> l
         pred = nuisance_nrmse if why else eff.predicted_nrmse(ctx, sr)
         out.append(_Screened(eff, sr, pred, ev, why))
     return sorted(out, key=lambda s: s.predicted)
+
+
+def _worth_fitting(screened: list[_Screened], nuisance_nrmse: float, top: int | None) -> set[str]:
+    """The candidates to fit, among those not ruled out (in screening order).
+    With `top`: the first `top`. Without: the first ALWAYS_FIT, every cheap
+    one (one parameter and no contact: a few fast simulations), and every other
+    one whose screening predicts an error at least HELP_MARGIN below
+    re-estimating the present parameters alone. A costly fit (several
+    parameters, or contact) is as long as the whole screening, and one that
+    screening predicts no gain for ends low in the ranking anyway (its
+    screening estimate is kept and listed). The first few and the cheap ones
+    are fitted whatever screening says: the linear screening reads some
+    signatures poorly (a delay's gain is underestimated)."""
+    not_ruled_out = [s for s in screened if not s.ruled_out]
+    if top is not None:
+        return {s.effect.name for s in not_ruled_out[:top]}
+    gain_needed = (1.0 - scoring.HELP_MARGIN) * nuisance_nrmse
+    return {
+        s.effect.name
+        for i, s in enumerate(not_ruled_out)
+        if i < ALWAYS_FIT or _cheap_fit(s.effect) or s.predicted <= gain_needed
+    }
+
+
+def _cheap_fit(effect: Effect) -> bool:
+    return effect.n_params == 1 and not effect.costly
+
+
+def _fit_candidates(
+    ctx: Context,
+    screened: list[_Screened],
+    nuisance_nrmse: float,
+    baseline_validation: float,
+    split: scoring.ValidationSplit,
+    top: int | None,
+    fit: bool,
+    say: Callable[[str], None],
+    notes: list[str],
+) -> dict[str, Candidate]:
+    """Fit the candidates _worth_fitting picks; then, when a fitted one whose
+    own signature screening found absent lowered the validation error anyway
+    (_screening_underreads), the rest too. Returns the fitted ones by name."""
+    if not fit:
+        return {}
+    chosen = _worth_fitting(screened, nuisance_nrmse, top)
+    out: dict[str, Candidate] = {}
+
+    def fit_all(names: set[str]) -> None:
+        for s in screened:
+            if s.effect.name in names and s.effect.name not in out:
+                c = _fitted_candidate(ctx, s, split, say, notes)
+                if c is not None:
+                    out[s.effect.name] = c
+
+    fit_all(chosen)
+    if top is None and _screening_underreads(screened, out, nuisance_nrmse, baseline_validation):
+        chosen = {s.effect.name for s in screened if not s.ruled_out}
+        fit_all(chosen)
+    _note_unfitted(screened, chosen, top, notes)
+    return out
+
+
+def _screening_underreads(
+    screened: list[_Screened],
+    fitted: dict[str, Candidate],
+    nuisance_nrmse: float,
+    baseline_validation: float,
+) -> bool:
+    """A fitted candidate whose own columns screening found empty (predicted
+    gain under NO_SIGNATURE_GAIN) still lowers the validation error by
+    HELP_MARGIN: the gain comes from re-estimating the present parameters,
+    which the linear screening underestimates on this record, so no
+    candidate may be left to its screening estimate."""
+    empty = (1.0 - NO_SIGNATURE_GAIN) * nuisance_nrmse
+    lowered = (1.0 - scoring.HELP_MARGIN) * baseline_validation
+    return any(
+        s.predicted >= empty and fitted[s.effect.name].validation_nrmse_after <= lowered
+        for s in screened
+        if s.effect.name in fitted
+    )
+
+
+def _note_unfitted(
+    screened: list[_Screened], to_fit: set[str], top: int | None, notes: list[str]
+) -> None:
+    """One note naming the candidates left to their screening estimate."""
+    unfitted = [s.effect.name for s in screened if not s.ruled_out and s.effect.name not in to_fit]
+    if not unfitted:
+        return
+    why = (
+        f"outside the best {top} by screening"
+        if top is not None
+        else f"costly, screening predicts less than {100 * scoring.HELP_MARGIN:.0f} % gain"
+    )
+    notes.append(f"not fitted ({why}): {', '.join(unfitted)}")
 
 
 def _screen_parameters(ctx: Context, eff: Effect, sr: Any) -> dict[str, Any]:
@@ -346,18 +448,13 @@ def diagnose(
         f"{base.nrmse:.4f}, re-estimating present parameters alone {nuis.nrmse:.4f})"
     )
     screened = _screen_all(ctx, effects, nuis.nrmse)
-    limit = len(screened) if top is None else top
-    cands: list[Candidate] = []
     notes: list[str] = []
-    for s in screened:
-        c = None
-        if fit and not s.ruled_out and sum(c.method == "fit" for c in cands) < limit:
-            c = _fitted_candidate(ctx, s, split, say, notes)
-        cands.append(c or _screening_candidate(ctx, s, split))
+    base_val = _baseline_validation(ctx, split)
+    fitted = _fit_candidates(ctx, screened, nuis.nrmse, base_val, split, top, fit, say, notes)
+    cands = [fitted.get(s.effect.name) or _screening_candidate(ctx, s, split) for s in screened]
     baseline_score, n_eff = _score_all(ctx, cands, split)
     tie = scoring.tie_relative(sum(n_eff.values()))
     ranked = scoring.order_candidates(cands, tie)
-    base_val = _baseline_validation(ctx, split)
     for c in ranked:
         c.helps = scoring.helps(c, base_val, baseline_score)
     return DiagnoseResult(

@@ -18,8 +18,9 @@ errors are always reported on the whole record and on the validation blocks.
 
 Non-smooth costs: a parameter with a ``grid`` is first searched on multiples
 of its seed (cost only); a parameter with ``starts`` (the backlash gap) gets
-one local fit from each start and the best is kept (multi-start: a single
-start from a short gap can end in a local minimum).
+a short probe of those parameters alone from each start, and the full fit
+from the best probe (multi-start: a single start from a short gap can end in
+a local minimum).
 
 Uncertainty: standard deviations from the Jacobian at the solution,
 ``cov = s^2 (J^T J)^-1`` with ``s^2 = RSS/(m - p)``. Residuals of real rigs are
@@ -285,19 +286,46 @@ def _local_fit(prob: _Problem, x0: np.ndarray, max_nfev: int):
     )
 
 
+def _probe(prob: _Problem, x: np.ndarray, free: list[int]) -> tuple[float, np.ndarray]:
+    """A short local fit (START_NFEV evaluations) of the parameters `free`
+    only, the others held at x: the starts are guesses of those parameters,
+    and holding the rest makes each numerical Jacobian cost len(free)
+    simulations instead of one per parameter. Returns (cost, x)."""
+    from scipy.optimize import least_squares
+
+    def full(v: np.ndarray) -> np.ndarray:
+        out = x.copy()
+        out[free] = v
+        return out
+
+    params = [prob.params[i] for i in free]
+    res = least_squares(
+        lambda v: prob.residuals(full(v)),
+        x[free],
+        bounds=(np.array([p.lower for p in params]), np.array([p.upper for p in params])),
+        x_scale=_scales(prob, x)[free],
+        method="trf",
+        diff_step=np.array([p.diff_step for p in params]),
+        max_nfev=START_NFEV,
+        xtol=1e-8,
+        ftol=1e-8,
+    )
+    return float(res.cost), full(res.x)
+
+
 def _multi_start(prob: _Problem, x0: np.ndarray, max_nfev: int):
-    """Multi-start: a short local fit (START_NFEV evaluations) from x0 and
-    from every start of the parameters that have starts, then the full local
-    fit from the one with the lowest cost."""
+    """Multi-start: a short probe (_probe) of the parameters that have starts
+    from x0 and from every start, then the full local fit of every parameter
+    from the probe with the lowest cost."""
+    free = [i for i, p in enumerate(prob.params) if p.starts]
     trials = [x0]
-    for i, p in enumerate(prob.params):
-        for start in p.starts:
+    for i in free:
+        for start in prob.params[i].starts:
             x = x0.copy()
-            x[i] = p.clip(start)
+            x[i] = prob.params[i].clip(start)
             trials.append(x)
     if len(trials) > 1:
-        probes = [_local_fit(prob, x, START_NFEV) for x in trials]
-        x0 = min(probes, key=lambda r: r.cost).x
+        x0 = min((_probe(prob, x, free) for x in trials), key=lambda r: r[0])[1]
     return _local_fit(prob, x0, max_nfev)
 
 
