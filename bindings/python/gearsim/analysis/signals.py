@@ -12,8 +12,9 @@ is the median power density in the upper half of the band; the cut-off is twice
 the highest frequency whose (smoothed) density still stands 30x above that
 floor, clamped to [fs/500, fs/8]. Quantized or noisy speeds get filtered where
 they are only noise; clean signals are barely touched. ``contact_cutoff`` is
-the cut-off for a speed that drives a backlash contact rather than a rigid
-mesh (3x instead of 30x, clamped to [the rigid cut-off, fs/4]; see there).
+the cut-off for a speed that drives a spring (a backlash contact or a
+compliant base shaft) rather than a rigid mesh (3x instead of 30x, clamped to
+[the rigid cut-off, fs/4]; see there).
 
 ``is_held`` recognises a held input: a command recorded with a zero-order
 hold (a CSV converted from a HIL log, a setpoint logged at a slower rate than
@@ -98,7 +99,8 @@ def _psd(x: np.ndarray, fs_hz: float, nseg: int = 1024) -> tuple[np.ndarray, np.
 
 #: density above the high-band floor that still counts as signal, and the
 #: upper clamp (fraction of fs): for the rigid rig, which differentiates the
-#: speed, and for a backlash contact, which does not (see contact_cutoff)
+#: speed, and for a backlash contact or a compliant shaft, which do not
+#: (see contact_cutoff)
 RIGID_SIGNAL_RATIO, RIGID_MAX_FRACTION = 30.0, 1.0 / 8.0
 CONTACT_SIGNAL_RATIO, CONTACT_MAX_FRACTION = 3.0, 1.0 / 4.0
 
@@ -132,15 +134,18 @@ def auto_cutoff(x: np.ndarray, fs_hz: float) -> float | None:
 
 
 def contact_cutoff(x: np.ndarray, fs_hz: float) -> float | None:
-    """Cut-off (Hz) for a speed that drives a backlash contact: twice the
-    highest frequency still 3x above the high-band floor, in [the rigid
-    cut-off, fs/4]. The rigid rig differentiates the speed for the inertia
-    torque, which multiplies the noise by the frequency, so it cuts where the
-    signal is still 30x above the noise. A contact integrates the speed into
-    the tooth position, and the driven inertia sits behind the contact
-    spring, which filters its acceleration itself: only the band where an
-    encoder's quantization noise (rising with frequency) outweighs the motion
-    needs to go, and the impacts' fast content stays."""
+    """Cut-off (Hz) for a speed that drives a spring, a backlash contact or
+    a compliant base shaft: twice the highest frequency still 3x above the
+    high-band floor, in [the rigid cut-off, fs/4]. The rigid rig
+    differentiates the speed for the inertia torque, which multiplies the
+    noise by the frequency, so it cuts where the signal is still 30x above
+    the noise. A contact integrates the speed into the tooth position, a
+    shaft into its twist, and the inertia behind the spring filters its own
+    acceleration: only the band where an encoder's quantization noise
+    (rising with frequency) outweighs the motion needs to go. The impacts
+    and the shaft's ring keep their fast content: a rigid cut-off near the
+    ring's frequency would take part of the ring out of the input that
+    excites it."""
     rigid = auto_cutoff(x, fs_hz)
     if rigid is None:
         return None

@@ -13,10 +13,11 @@ input's own spectrum (:func:`gearsim.analysis.signals.auto_cutoff`). Pass
 ``input_filter=None`` to feed the raw samples, or a number (Hz) to fix the
 cut-off for every input. With "auto", an input recorded as a zero-order-hold
 staircase (:func:`gearsim.analysis.signals.is_held`, e.g. a command from a HIL
-log) is fed as it is: its steps are what the rig saw. A model with backlash
-gets the measured speed through a wider filter
-(:func:`gearsim.analysis.signals.contact_cutoff`): its contact integrates the
-speed instead of differentiating it, so the impacts keep their fast content.
+log) is fed as it is: its steps are what the rig saw. A model with backlash or
+a compliant base shaft gets the measured speed through a wider filter
+(:func:`gearsim.analysis.signals.contact_cutoff`): the contact or the shaft
+integrates the speed into a spring's deflection instead of differentiating
+it, so the impacts and the shaft's ring keep their fast content.
 
 Rig time (a CSV of ``gearsim hil to-csv`` whose first line says
 ``time_base=rig``, :attr:`Measurement.time_base`): the model is stepped as the
@@ -43,6 +44,8 @@ from .signals import auto_cutoff, contact_cutoff, is_held, zero_phase_lowpass
 
 __all__ = [
     "Inputs",
+    "integrates_drive_speed",
+    "CONTACT_LABEL",
     "RigSteps",
     "prepare_inputs",
     "rig_steps_of",
@@ -118,14 +121,31 @@ def row_samples(fine: np.ndarray, steps: RigSteps) -> np.ndarray:
     return np.asarray(fine, dtype=float)[n - 1 :: n]
 
 
+#: how input_filter_hz lists the cut-off of contact_speed
+CONTACT_LABEL = "backlash contact or compliant shaft"
+
+
+def integrates_drive_speed(model: Any) -> bool:
+    """True when the rig turns the drive speed into a spring's deflection
+    (a backlash contact, or a compliant base shaft: compliance_stiffness >
+    0) rather than differentiating it for a rigid inertia torque. Such a rig
+    filters the speed's fast content itself, through the spring and the
+    inertia behind it, so it is driven by the wider contact cut-off, which
+    keeps the shaft's ring and the impacts in the input."""
+    if mk.block_values(model).get("backlash_enabled"):
+        return True
+    return float(mk.rig_values(model).get("compliance_stiffness", 0.0)) > 0.0
+
+
 @dataclass(frozen=True)
 class Inputs:
     """Rig inputs derived from a measurement (SI units, one value per sample).
 
     cutoffs: input column -> cut-off (Hz) applied, or None when unfiltered;
-    plus "<speed column> (backlash contact)" when contact_speed is set.
-    contact_speed: the base speed for a model with backlash, when its
-    conditioning differs from base_speed's (None: the same).
+    plus "<speed column> (CONTACT_LABEL)" when contact_speed is set.
+    contact_speed: the base speed for a model with backlash or a compliant
+    base shaft (integrates_drive_speed), when its conditioning differs from
+    base_speed's (None: the same).
     rig_steps: how the rig was stepped over the rows (a rig-time CSV), or
     None: the model is stepped once per row, at dt."""
 
@@ -140,8 +160,10 @@ class Inputs:
 
     def speed_for(self, model: Any) -> np.ndarray:
         """The base speed that drives `model`'s rig: contact_speed for a
-        model with backlash, base_speed otherwise."""
-        if self.contact_speed is not None and mk.block_values(model).get("backlash_enabled"):
+        model with backlash or a compliant base shaft (both integrate the
+        speed into a spring's deflection instead of differentiating it),
+        base_speed otherwise."""
+        if self.contact_speed is not None and integrates_drive_speed(model):
             return self.contact_speed
         return self.base_speed
 
@@ -193,7 +215,7 @@ def prepare_inputs(meas: Measurement, input_filter: float | str | None = "auto")
     if input_filter == "auto" and cutoffs[spec.speed_input] is not None:
         fc = contact_cutoff(meas[spec.speed_input], fs)
         if fc is not None and fc > cutoffs[spec.speed_input]:
-            cutoffs[f"{spec.speed_input} (backlash contact)"] = fc
+            cutoffs[f"{spec.speed_input} ({CONTACT_LABEL})"] = fc
             contact = zero_phase_lowpass(meas[spec.speed_input], fc, fs)
     load = cond(spec.load_input)
     temp = cond(TEMPERATURE.name) if meas.has_temperature else None
