@@ -1,4 +1,4 @@
-"""Cost of `diagnose` on a long record (issue 15: under 10 s on 100 000
+"""Cost of `diagnose` on a long record (required: under 10 s on 100 000
 samples, target 2 s), on data gearsim did not make: a gear rig with a hidden
 Coulomb friction from the independent test generator
 (tests/python/analysis/independent: compliant mesh, drive speed loop, encoder

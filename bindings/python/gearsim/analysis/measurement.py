@@ -3,7 +3,7 @@
 A measurement is loaded and checked once, at the edge; everything behind
 :func:`load_measurement` works on validated, finite, uniformly sampled arrays.
 
-What is read (issue 13: gearsim reads whatever a logger wrote):
+What is read (gearsim reads whatever a logger wrote):
 
 - plain or compressed files: gzip, bzip2, xz and zstd (``.gz``, ``.bz2``,
   ``.xz``, ``.zst``), recognised by their magic bytes whatever the file is

@@ -403,7 +403,7 @@ def backlash_evidence(ctx: Context) -> BacklashEvidence:
     )
 
 
-# ---------------------------------------------------------------- signatures of issue 17
+# ---------------------------------------------------------------- signatures of the effects beyond the seed blocks
 #
 # The four effects beyond the seed blocks have signatures that are not (only)
 # columns of r_d; these functions compute what a person checks, on plain
