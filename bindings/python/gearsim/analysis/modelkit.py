@@ -9,10 +9,8 @@ here.
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Mapping
 from os import PathLike
-from pathlib import Path
 from typing import Any
 
 from ..model import Model
@@ -65,8 +63,9 @@ def _analysis_value(key: str, value: Any) -> float:
 class AnalysisModel(Model):
     """A Model plus the analysis-only settings of the model file's
     ``[analysis]`` table (:data:`ANALYSIS_KEYS`), e.g. ``torque_delay = "6 ms"``.
-    They change how the simulated outputs are compared, not the C rig, so
-    they live here and not in gearsim.Model; everything else is the Model's."""
+    They change how the simulated outputs are compared, not the C rig:
+    gearsim.Model reads, carries and writes the table as it is; this class
+    validates it into SI values. Everything else is the Model's."""
 
     def __init__(
         self,
@@ -114,19 +113,6 @@ class AnalysisModel(Model):
         new = super().replace(block_params=block_params, rig_params=rig_params)
         return AnalysisModel.of(new, self.analysis)
 
-    def to_dict(self) -> dict[str, Any]:
-        out = super().to_dict()
-        if self.analysis:
-            out["analysis"] = dict(self.analysis)
-        return out
-
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any], file: str | PathLike[str] | None = None):
-        rest = dict(data) if isinstance(data, Mapping) else data
-        analysis = rest.pop("analysis", None) if isinstance(rest, dict) else None
-        plain = Model.from_dict(rest, file=file)
-        return cls(plain.block, plain.block_params, plain.rig_params, file=file, analysis=analysis)
-
     def _key(self) -> Any:
         return (super()._key(), tuple(sorted(self.analysis.items())))
 
@@ -143,19 +129,10 @@ class AnalysisModel(Model):
 
 
 def load_model(path: str | PathLike[str]) -> AnalysisModel:
-    """Read a model file with its optional [analysis] table (exit-2 errors
-    name the file and key, like Model.load)."""
-    from ..errors import ModelFileError
-
-    try:
-        text = Path(path).read_bytes().decode("utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ModelFileError(f"cannot read the model file: {exc}", file=path) from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ModelFileError(f"TOML syntax: {exc}", file=path) from None
-    return AnalysisModel.from_dict(data, file=path)
+    """Read a model file with its optional [analysis] table validated (exit-2
+    errors name the file and key, like Model.load, which does the reading:
+    its from_dict hands the table to AnalysisModel)."""
+    return AnalysisModel.load(path)
 
 
 def torque_delay(model: Any) -> float:
