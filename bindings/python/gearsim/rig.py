@@ -13,6 +13,7 @@ field tables (include/gearsim/fields.h, read by gearsim._lib at import).
 from __future__ import annotations
 
 import math
+import os
 import struct
 import warnings
 from collections.abc import Iterator, Mapping
@@ -22,7 +23,9 @@ from typing import Any, ClassVar
 import numpy as np
 
 from . import params as P
+from ._extras import require
 from ._lib import INPUT_INFO, OUTPUT_INFO, REAL_SIZE, STATE_INFO, FieldInfo, check, ffi, lib
+from ._outputs import atomic_writer
 from .blocks import Block, RackPinion, SimpleGear
 from .errors import GearsimError, InputError, ParameterError, SubstepWarning, caller_stacklevel
 
@@ -111,6 +114,54 @@ class RigResult(tuple):
     def as_array(self) -> np.ndarray:
         """The outputs as an N x 15 array (columns in FIELDS order)."""
         return np.column_stack([np.atleast_1d(v) for v in tuple.__iter__(self)])
+
+    def _columns(self, time: Any) -> dict[str, np.ndarray]:
+        """The outputs as named 1-D columns, ``time`` (s) first when given."""
+        data = self.as_array()
+        columns: dict[str, np.ndarray] = {}
+        if time is not None:
+            t = np.asarray(time, dtype=float).reshape(-1)
+            if t.shape[0] != data.shape[0]:
+                raise ValueError(
+                    f"time has {t.shape[0]} values for {data.shape[0]} output samples"
+                )
+            columns["time"] = t
+        for i, name in enumerate(OUTPUT_NAMES):
+            columns[name] = data[:, i]
+        return columns
+
+    def to_csv(self, path: str | os.PathLike[str], time: Any = None) -> None:
+        """Writes the outputs to a CSV file: a header of the FIELDS names
+        (``time`` first when ``time``, in s, is given), one row per sample,
+        SI units as in the class docstring, every value with the 17 digits
+        that round-trip a double. The file is written atomically (a
+        temporary file renamed over ``path``)."""
+        columns = self._columns(time)
+        table = np.column_stack(list(columns.values()))
+        with atomic_writer(path, "w", encoding="utf-8", newline="") as fh:
+            fh.write(",".join(columns) + "\n")
+            np.savetxt(fh, table, fmt="%.17g", delimiter=",")
+
+    def to_dataframe(self, time: Any = None) -> Any:
+        """The outputs as a pandas DataFrame, one column per FIELDS name; with
+        ``time`` (s) it is the index, named ``time``. Needs pandas (the
+        ``analysis`` extra)."""
+        require("RigResult.to_dataframe", ["pandas"])
+        import pandas as pd
+
+        columns = self._columns(time)
+        frame = pd.DataFrame(columns)
+        return frame.set_index("time") if time is not None else frame
+
+    def to_parquet(self, path: str | os.PathLike[str], time: Any = None) -> None:
+        """Writes the outputs to a Parquet file (the columns of to_dataframe,
+        ``time`` as a column), atomically. Needs pandas and pyarrow."""
+        require("RigResult.to_parquet", ["pandas", "pyarrow"])
+        frame = self.to_dataframe(time)
+        if time is not None:
+            frame = frame.reset_index()
+        with atomic_writer(path, "wb") as fh:
+            frame.to_parquet(fh, index=False)
 
     def __getitem__(self, name: str) -> Any:  # type: ignore[override]
         if not isinstance(name, str) or name not in _OUT_COL:
