@@ -141,10 +141,11 @@ typedef enum {
     GS_PARAM_GROUP = 8   /* a nested params struct, described by members */
 } gs_param_kind;
 
-/* Flags of a parameter: it may change between the steps of a running rig
- * (re-tuning); it is used by the Simple Gear only. */
-#define GS_PARAM_TUNABLE 1
-#define GS_PARAM_GEAR_ONLY 2
+/* Flags of a parameter (gs_param_info.flags holds their bitwise or). */
+typedef enum {
+    GS_PARAM_TUNABLE = 1,  /* may change between the steps of a running rig (re-tuning) */
+    GS_PARAM_GEAR_ONLY = 2 /* used by the Simple Gear only */
+} gs_param_flag;
 
 /* One option of an option parameter. */
 typedef struct {
