@@ -251,6 +251,71 @@ def describe(specs: Iterable[Param]) -> str:
     return "\n".join(lines)
 
 
+# ---------------------------------------------------------------- documentation
+
+
+def _doc_number(x: float) -> str:
+    text = f"{x:.15g}"
+    return text.replace("e+0", "e").replace("e+", "e").replace("e-0", "e-")
+
+
+def _doc_value(p: Param, value: Any) -> str:
+    """A default as the docs write it."""
+    if value is None:
+        return "absent"
+    if p.kind == OPTION:
+        return f'`"{value}"`'
+    if p.kind == BOOL:
+        return "true" if value else "false"
+    if isinstance(value, list):
+        return "[" + ", ".join(_doc_value(p, v) for v in value) + "]"
+    if isinstance(value, int):
+        return str(value)
+    return _doc_number(float(value))
+
+
+def _doc_kind(p: Param, unit: str) -> str:
+    if p.options:
+        return " / ".join(f'`"{text}"`' for text, _ in p.options)
+    if p.kind in (BOOL, INT):
+        return {BOOL: "bool", INT: "integer"}[p.kind]
+    unit = unit or "–"
+    if p.kind == ARRAY:
+        return f"{p.length} values, {unit}"
+    return unit
+
+
+def markdown_table(block: str, part: str) -> str:
+    """The Markdown table of a block's "block" or "rig" parameters (key, SI
+    unit or options, default, meaning), from the C tables and defaults; the rig
+    table gives both rigs' names and units. docs/python.md carries these
+    (doc_tables() prints them; a test keeps them current)."""
+    rows = ["| key | SI unit / values | default | meaning |", "|---|---|---|---|"]
+    if part == "block":
+        specs, _, _, _ = BLOCKS[block]
+        defaults = block_defaults(block)
+        for p in specs:
+            what = _doc_kind(p, p.unit)
+            rows.append(f"| `{p.name}` | {what} | {_doc_value(p, defaults[p.name])} | {p.doc} |")
+        return "\n".join(rows)
+    rows[0] = "| key | SI unit / values (gear rig; rack rig) | default | meaning |"
+    rows.append('| `block` | `"simple_gear"` / `"rack_pinion"` | required | the block |')
+    gear_defaults = rig_defaults("simple_gear")
+    for g, r in zip(GEAR_RIG_PARAMS, RACK_RIG_PARAMS, strict=True):
+        name = f"`{g.name}`" if g.name == r.name else f"`{g.name}` (gear) / `{r.name}` (rack)"
+        what = _doc_kind(g, g.unit)
+        if r.unit != g.unit:
+            what = f"{what}; {_doc_kind(r, r.unit)}"
+        rows.append(f"| {name} | {what} | {_doc_value(g, gear_defaults[g.name])} | {g.doc} |")
+    return "\n".join(rows)
+
+
+def doc_tables() -> str:
+    """The three tables of docs/python.md: Simple Gear, Rack & Pinion, rig."""
+    parts = (("simple_gear", "block"), ("rack_pinion", "block"), ("simple_gear", "rig"))
+    return "\n\n".join(markdown_table(block, part) for block, part in parts)
+
+
 # ---------------------------------------------------------------- conversion
 
 
