@@ -23,9 +23,6 @@ GS_OPTION_LISTS(GS_OPTION_LIST_)
 static const gs_param_options gs_options_NONE_ = {"", NULL, 0};
 
 /* ---- per-kind fields of an entry */
-#define GS_PARAM_FLAGS_FIXED 0
-#define GS_PARAM_FLAGS_TUNABLE GS_PARAM_TUNABLE
-#define GS_PARAM_FLAGS_GEAR_ONLY GS_PARAM_GEAR_ONLY
 
 /* length, columns, count, count2, members, member_count */
 #define GS_PARAM_SCALAR_ 1u, 1u, "", "", NULL, 0u
@@ -42,7 +39,7 @@ static const gs_param_options gs_options_NONE_ = {"", NULL, 0};
     1u, 1u, "", "", gs_##member##_param_info, sizeof(gs_##member##_param_info) / sizeof(gs_param_info)
 
 #define GS_PARAM_INFO_(T, kind, member, count, key, rack_key, gear_unit, rack_unit, options, flags, doc)    \
-    {key, rack_key, #member, gear_unit, rack_unit, doc, GS_PARAM_##kind, GS_PARAM_FLAGS_##flags,            \
+    {key, rack_key, #member, gear_unit, rack_unit, doc, GS_PARAM_##kind, GS_PARAM_##flags,            \
      offsetof(T, member), sizeof(((T *)NULL)->member), GS_PARAM_SHAPE_##kind(member, count), &gs_options_##options##_},
 
 /* A block list has one key and one unit for both rigs. */

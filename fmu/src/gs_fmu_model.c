@@ -187,7 +187,7 @@ static void add_param(var_list *l, const gs_param_info *e, size_t base)
             v->base_name = name;
             v->type = type;
             v->causality = GS_FMU_C_PARAMETER;
-            v->variability = (e->flags & GS_PARAM_TUNABLE) ? GS_FMU_V_TUNABLE : GS_FMU_V_FIXED;
+            v->variability = e->flags == GS_PARAM_TUNABLE ? GS_FMU_V_TUNABLE : GS_FMU_V_FIXED;
             v->region = GS_FMU_AT_PARAMS;
             v->storage = type == GS_FMU_T_REAL ? GS_FMU_S_REAL : GS_FMU_S_INT;
             v->offset = base + e->offset + (i * e->columns + j) * element;
@@ -206,7 +206,7 @@ static void add_params(var_list *l, const gs_param_info *table, size_t count, si
 {
     for (size_t i = 0; i < count && !l->failed; ++i) {
         const gs_param_info *e = &table[i];
-        if (e->kind != GS_PARAM_GROUP && !(l->rack && (e->flags & GS_PARAM_GEAR_ONLY))) {
+        if (e->kind != GS_PARAM_GROUP && !(l->rack && e->flags == GS_PARAM_GEAR_ONLY)) {
             add_param(l, e, base);
         }
     }

@@ -29,7 +29,7 @@
 static const gs_param_options no_options = {"", NULL, 0};
 static const gs_param_info run_info[] = {
     {"ambient_temperature", "ambient_temperature", "ambient_temperature_K", "K", "K",
-     "ambient and measured temperature inputs (> 0)", GS_PARAM_REAL, 0, offsetof(runner_params, ambient_temperature_K),
+     "ambient and measured temperature inputs (> 0)", GS_PARAM_REAL, GS_PARAM_FIXED, offsetof(runner_params, ambient_temperature_K),
      sizeof(gs_real), 1, 1, "", "", NULL, 0, &no_options},
 };
 

@@ -141,10 +141,11 @@ typedef enum {
     GS_PARAM_GROUP = 8   /* a nested params struct, described by members */
 } gs_param_kind;
 
-/* Flags of a parameter (gs_param_info.flags holds their bitwise or). */
+/* When a parameter may change, and where it is used (distinct bits). */
 typedef enum {
+    GS_PARAM_FIXED = 0,    /* set before init; fixed while the rig runs */
     GS_PARAM_TUNABLE = 1,  /* may change between the steps of a running rig (re-tuning) */
-    GS_PARAM_GEAR_ONLY = 2 /* used by the Simple Gear only */
+    GS_PARAM_GEAR_ONLY = 2 /* fixed, and used by the Simple Gear only */
 } gs_param_flag;
 
 /* One option of an option parameter. */
@@ -174,7 +175,7 @@ typedef struct gs_param_info_ {
     const char *rack_unit;                /* the unit in the Rack & Pinion rig */
     const char *doc;                      /* one line: meaning and valid range */
     gs_param_kind kind;
-    int flags;                            /* GS_PARAM_TUNABLE, GS_PARAM_GEAR_ONLY */
+    gs_param_flag flags;                  /* FIXED, TUNABLE or GEAR_ONLY */
     size_t offset;                        /* byte offset of the member in its struct */
     size_t size;                          /* sizeof the member (the whole array) */
     size_t length;                        /* values along the first index: 1 for a scalar */

@@ -254,6 +254,7 @@ static void check_table(const gs_param_info *table, size_t n)
     for (size_t i = 0; i < n; ++i) {
         const gs_param_info *e = &table[i];
         assert_true(strlen(e->key) > 0 && strlen(e->rack_key) > 0 && strlen(e->doc) > 0);
+        assert_true(e->flags == GS_PARAM_FIXED || e->flags == GS_PARAM_TUNABLE || e->flags == GS_PARAM_GEAR_ONLY);
         check_options(e);
         if (e->kind == GS_PARAM_OPTION || e->kind == GS_PARAM_BOOL || e->kind == GS_PARAM_INT ||
             e->kind == GS_PARAM_COUNT || e->kind == GS_PARAM_GROUP) {
@@ -289,7 +290,7 @@ static size_t collect_keys(const gs_param_info *table, size_t n, int rack, const
         const gs_param_info *e = &table[i];
         if (e->kind == GS_PARAM_GROUP) {
             k = collect_keys(e->members, e->member_count, rack, keys, k);
-        } else if (!(rack && (e->flags & GS_PARAM_GEAR_ONLY))) {
+        } else if (!(rack && e->flags == GS_PARAM_GEAR_ONLY)) {
             assert_true(k < 2 * MAX_ENTRIES);
             keys[k++] = rack ? e->rack_key : e->key;
         }
@@ -366,7 +367,7 @@ static void test_documented_entries(void **state)
 
     const gs_param_info *b = find(gs_backlash_param_info, GS_BACKLASH_PARAM_FIELDS, "base_radius_m");
     assert_non_null(b);
-    assert_true((b->flags & GS_PARAM_GEAR_ONLY) != 0);
+    assert_int_equal(b->flags, GS_PARAM_GEAR_ONLY);
     assert_string_equal(b->key, "base_radius");
 }
 

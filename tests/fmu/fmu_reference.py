@@ -140,7 +140,7 @@ class Reference:
                 member = f"{path}{string(e.member).decode()}"
                 if e.kind == lib.GS_PARAM_GROUP:
                     walk(e.members, e.member_count, f"{member}.")
-                elif not (rack and e.flags & lib.GS_PARAM_GEAR_ONLY):
+                elif not (rack and e.flags == lib.GS_PARAM_GEAR_ONLY):
                     out[string(e.rack_key if rack else e.key).decode()] = member
 
         walk(lib.gs_rig_param_info, len(lib.gs_rig_param_info), "rig.")

@@ -131,7 +131,9 @@ def _from_table(table: Any, count: int, rack: bool) -> tuple[Param, ...]:
     owned: set[str] = set()
     for e, field, prefix in _entries(table, count):
         kind = int(e.kind)
-        if kind == int(lib.GS_PARAM_COUNT) or (rack and int(e.flags) & int(lib.GS_PARAM_GEAR_ONLY)):
+        if kind == int(lib.GS_PARAM_COUNT) or (
+            rack and int(e.flags) == int(lib.GS_PARAM_GEAR_ONLY)
+        ):
             continue
         counter = prefix + _text(e.count) if _text(e.count) else ""
         sets_count = kind == int(lib.GS_PARAM_TABLE) and counter not in owned
