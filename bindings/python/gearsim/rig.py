@@ -228,17 +228,10 @@ class Rig:
         dt: fixed step (s).
         temperature_input: when True, the losses use the measured_temperature
             input instead of the thermal state.
-        **rig_params: follower_inertia (gear) or rack_mass (rack),
-            load_coulomb_friction, load_coulomb_speed_threshold, load_offset,
-            thermal_resistance (None = adiabatic), ambient_temperature,
-            base_inertia, initial_base_speed, accel_filter_time_constant,
-            contact_substeps, base_drive ("speed" or "torque"),
-            load_breakaway_friction, load_stribeck_speed (Stribeck friction),
-            compliance_stiffness, compliance_damping (compliant base shaft),
-            ripple_revolution_amplitude, ripple_revolution_phase,
-            ripple_mesh_amplitude, ripple_mesh_phase (2 values each),
-            ripple_mesh_teeth (base-side torque ripple). SI numbers or unit
-            strings; missing ones take the defaults (Rig.defaults()).
+        **rig_params: the rig parameters (listed with their units in
+            help(GearRig) and help(RackRig), read from the C parameter
+            tables), SI numbers or unit strings; missing ones take the
+            defaults (Rig.defaults()).
     """
 
     def __init__(
@@ -255,7 +248,7 @@ class Rig:
             )
         kind = block.kind
         rig_specs = {p.name: p for p in P.BLOCKS[kind][1]}
-        dt_value = P.normalize(P.Param("dt", P.REAL, "s"), dt)
+        dt_value = P.normalize(P.RIG_ARGUMENT_PARAMS["dt"], dt)
         given = P.normalize_all(rig_specs, rig_params, f"{kind} rig")
         full = {**P.rig_defaults(kind), **given}
         c_params = ffi.new("gs_rig_params *")
@@ -277,7 +270,7 @@ class Rig:
         def value_of(name: str) -> Any:  # called by check() only on failure
             return {**block.params, **full, "dt": dt_value}[name]
 
-        check(status, err, rename=_c_rig_names(kind), value_of=value_of)
+        check(status, err, rename=P.c_rig_names(kind), value_of=value_of)
         info = ffi.new("gs_rig_info *")
         lib.gs_rig_get_info(consts, info)
         self._substeps = int(info.contact_substeps)
@@ -694,19 +687,6 @@ def _finite(name: str, value: Any) -> float:
     return x
 
 
-def _c_rig_names(kind: str) -> dict[str, str]:
-    """C parameter names reported by gs_rig_init_* -> Python names, where they differ."""
-    driven = "follower_inertia" if kind == "simple_gear" else "rack_mass"
-    return {
-        "driven_inertia": driven,
-        "dt_s": "dt",
-        "base_inertia_kg_m2": "base_inertia",
-        "thermal_resistance_K_W": "thermal_resistance",
-        "accel_filter_time_constant_s": "accel_filter_time_constant",
-        "initial_base_speed_rad_s": "initial_base_speed",
-    }
-
-
 def _split(
     block_cls: type[Block], block: Any, params: dict[str, Any]
 ) -> tuple[Block, dict[str, Any]]:
@@ -765,3 +745,7 @@ class RackRig(Rig):
     ) -> None:
         block, rig_params = _split(RackPinion, rack, params)
         super().__init__(block, dt=dt, temperature_input=temperature_input, **rig_params)
+
+
+GearRig.__doc__ = f"{GearRig.__doc__}\n    Rig parameters:\n\n{P.describe(P.GEAR_RIG_PARAMS)}\n"
+RackRig.__doc__ = f"{RackRig.__doc__}\n    Rig parameters:\n\n{P.describe(P.RACK_RIG_PARAMS)}\n"
