@@ -1,7 +1,8 @@
 """Build glue: the version from include/gearsim/version.h (its one source), the
-C library gearsim_core from src/ (build_clib, with the library's warning set)
-and the cffi extension from bindings/python/gearsim_build.py, linked against
-it. Everything else is in pyproject.toml."""
+C libraries gearsim_core from src/ and gearsim_hil from hil/src/ (build_clib,
+with the library's warning set) and the cffi extension from
+bindings/python/gearsim_build.py, linked against them. Everything else is in
+pyproject.toml."""
 
 import re
 import sys
@@ -56,7 +57,7 @@ class build_ext_with_core(build_ext):
 
 setup(
     version=_version(),
-    libraries=[gearsim_build.core_library()],
+    libraries=gearsim_build.c_libraries(),
     cmdclass={"build_clib": build_clib_flags, "build_ext": build_ext_with_core},
     cffi_modules=["bindings/python/gearsim_build.py:make_builder"],
 )

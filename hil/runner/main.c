@@ -31,12 +31,12 @@
 #include <unistd.h>
 
 #include "gearsim/hil.h"
+#include "gearsim/hil_dbc.h"
 #include "loop_stats.h"
 #include "params.h"
 #include "transport.h"
 
 #define EXIT_BAD_INPUT 2
-#define REPLAY_SLACK_S 1e-6 /* a frame this close after a period boundary counts as at it */
 
 typedef struct {
     const char *params_path;
@@ -374,14 +374,6 @@ static int replay_send(void *context, const gs_hil_frame *frame)
     return 0;
 }
 
-static void advance_to(gs_hil_bridge *b, uint64_t period)
-{
-    uint64_t now = b->counters.count[GS_HIL_COUNT_PERIODS];
-    if (period > now) {
-        gs_hil_advance(b, period - now);
-    }
-}
-
 static FILE *open_answers(const options *o, char *tmp, size_t tmp_size)
 {
     if (o->out == NULL) {
@@ -469,14 +461,11 @@ static int run_replay(const options *o)
             have_origin = 1;
             b->config.stamp_origin_s = origin;
         }
-        double t = frame.timestamp_s - origin;
-        double k_period = ceil((t - REPLAY_SLACK_S) / b->period_s);
-        advance_to(b, k_period > 0.0 ? (uint64_t)k_period : 0u);
+        gs_hil_advance_to(b, frame.timestamp_s - origin);
         gs_hil_handle(b, &frame);
     }
     fclose(log);
-    double tail = nearbyint(o->tail_s / b->period_s);
-    gs_hil_advance(b, 1u + (tail > 0.0 ? (uint64_t)tail : 0u));
+    gs_hil_advance(b, 1u + gs_hil_periods_in(b, o->tail_s));
     gs_hil_close(b);
     run_report report = {0, seconds_of(CLOCK_MONOTONIC) - start, cpu_seconds() - cpu0, frames_in, sink.frames_out, 0, 0, NULL};
     int used = b->counters.count[GS_HIL_COUNT_RX_USED] != 0u;

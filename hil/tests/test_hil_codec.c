@@ -14,6 +14,7 @@
 #include <cmocka.h>
 
 #include "gearsim/hil.h"
+#include "gearsim/hil_dbc.h"
 
 #define GEAR_CMD 0u /* GearCmd is the first frame of gear_rig.dbc */
 

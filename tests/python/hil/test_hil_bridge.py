@@ -346,12 +346,21 @@ def test_setup_errors(gear: Any, gear_dbc: RigDbc, rack_dbc: RigDbc) -> None:
         Bridge.from_model(gear, gear_dbc).run(duration=0.01)
 
 
-def test_counter_fields_follow_the_one_list_of_status_counters():
-    # Counters spells its fields out (with their docs); the status frame's
-    # counter list in dbc_rules is the one source: same names, same order.
-    from dataclasses import fields
+def test_counters_are_the_c_bridges_own(gear: Any, gear_dbc: RigDbc) -> None:
+    """Counters reads the C bridge's counters by the names of gearsim/hil.h's
+    list (the one list, which the status frames use too): every name, in its
+    order, each the C count."""
+    from gearsim._lib import lib
+    from gearsim.hil.names import STATUS_COUNTS
 
-    from gearsim.hil.dbc_rules import STATUS_COUNTS
-
-    ints = [f.name for f in fields(Counters) if f.type in (int, "int")]
-    assert ints == [*STATUS_COUNTS, "steps"]
+    assert Counters.NAMES == (*STATUS_COUNTS, "steps")
+    assert STATUS_COUNTS[0] == "rx_total" and STATUS_COUNTS[-1] == "periods"
+    bridge = Bridge.from_model(gear, gear_dbc, period=1e-3, substeps=3)
+    bridge.advance(250)
+    counts = bridge._b.counters.count
+    for i, name in enumerate(STATUS_COUNTS):
+        assert getattr(bridge.counters, name) == counts[i], name
+    assert bridge.counters.periods == counts[lib.GS_HIL_COUNT_PERIODS] == 250
+    assert bridge.counters.steps == 750
+    # 10 ms frames x 2 over 250 ms, 100 ms frames x 3 at 100 and 200 ms
+    assert bridge.counters.tx_frames == 2 * 25 + 3 * 2

@@ -277,7 +277,7 @@ def test_compare_with_default_options_reproduces_the_rig(
 
 
 def test_live_run_records_in_rig_time_and_replays_to_its_answers(
-    tmp_path: Path, capsys: pytest.CaptureFixture
+    tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """`gearsim hil run --log` (paced by the wall clock, a host thread sending
     commands off the period grid) writes its log on the period grid, and
@@ -299,8 +299,18 @@ def test_live_run_records_in_rig_time_and_replays_to_its_answers(
                 k += 1
                 time.sleep(0.0037)
 
-    # the host's bus exists first: its first command (queued by the virtual bus
-    # for the bridge) is recorded at period 0, where a replay starts its periods
+    # A replay starts its periods at the log's first frame: the live run must
+    # find a command waiting at period 0. The host's bus exists first and sends
+    # every 3.7 ms; the bridge waits 10 ms between opening its bus and its first
+    # period, so that one of them is queued then (the virtual bus delivers only
+    # to buses that exist when a frame is sent).
+    original_run = Bridge.run
+
+    def run_after_a_command(self: Bridge, **kwargs: Any) -> Any:
+        time.sleep(0.01)
+        return original_run(self, **kwargs)
+
+    monkeypatch.setattr(Bridge, "run", run_after_a_command)
     thread = threading.Thread(target=host, daemon=True)
     thread.start()
     bus_ready.wait(5.0)

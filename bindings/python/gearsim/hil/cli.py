@@ -38,7 +38,6 @@ import signal
 import sys
 import threading
 import time
-from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -406,9 +405,9 @@ def _emit(args: argparse.Namespace, data: dict[str, Any], text: list[str]) -> No
 def _counter_lines(summary: dict[str, Any]) -> list[str]:
     from .bridge import Counters
 
-    # the Counters fields in their order, pending beside the rx classes it
+    # the counters in their order, pending beside the rx classes it
     # completes (rx_total = used + rejected + late + ignored + pending)
-    keys = [f.name for f in fields(Counters) if f.name not in ("reasons", "saturated")]
+    keys = list(Counters.NAMES)
     keys.insert(keys.index("rx_ignored") + 1, "pending")
     lines = [
         f"simulated time   {summary['simulated_time']:.6f} s "
