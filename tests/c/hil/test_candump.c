@@ -3,13 +3,7 @@
  * as python-can and can-utils write them, the frames they are, the lines
  * that are not frames, and a seeded random round trip frame -> line -> frame.
  */
-#include <setjmp.h>
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <string.h>
-
-#include <cmocka.h>
+#include "test_common.h"
 
 #include "candump.h"
 
@@ -108,30 +102,22 @@ static void test_format_as_python_can(void **unused)
     assert_int_equal(candump_format_line(&f, -1.0, "vcan0", line, sizeof line), 0);
 }
 
-static uint64_t next(uint64_t *s)
-{
-    *s ^= *s << 13;
-    *s ^= *s >> 7;
-    *s ^= *s << 17;
-    return *s;
-}
-
 /* Random classic frames written and read back: the same ID, kind, data, and
  * the stamp to the microsecond. */
 static void test_round_trip(void **unused)
 {
     (void)unused;
-    uint64_t seed = 20261126u;
+    test_rng seed = rng_seed(20261126u);
     for (int k = 0; k < 20000; ++k) {
         gs_hil_frame f;
         memset(&f, 0, sizeof f);
-        f.is_extended = (int)(next(&seed) % 2u);
-        f.id = (uint32_t)(next(&seed) & (f.is_extended ? 0x1FFFFFFFu : 0x7FFu));
-        f.length = (unsigned)(next(&seed) % 9u);
+        f.is_extended = (int)(rng_next(&seed) % 2u);
+        f.id = (uint32_t)(rng_next(&seed) & (f.is_extended ? 0x1FFFFFFFu : 0x7FFu));
+        f.length = (unsigned)(rng_next(&seed) % 9u);
         for (unsigned i = 0; i < f.length; ++i) {
-            f.data[i] = (uint8_t)next(&seed);
+            f.data[i] = (uint8_t)rng_next(&seed);
         }
-        double stamp = (double)(next(&seed) % 2000000000000000u) * 1e-6; /* whole microseconds below 2e9 s */
+        double stamp = (double)(rng_next(&seed) % 2000000000000000u) * 1e-6; /* whole microseconds below 2e9 s */
         char line[128];
         size_t n = candump_format_line(&f, stamp, "can0", line, sizeof line);
         assert_true(n > 0);

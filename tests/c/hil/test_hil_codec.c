@@ -221,23 +221,26 @@ static void test_feedback_cycles_and_status(void **unused)
 }
 
 /* Replay in log time: a frame t after the log's first is handled at the
- * first period boundary at or after t, within 1 us. */
+ * first period boundary at or after t, within 1 us. Times are multiples of
+ * the bridge's own period (1 ms as gs_real: 0.0010000000474974513 s in the
+ * float build), which (m * p) / p gives back exactly for these m. */
 static void test_replay_timing(void **unused)
 {
     (void)unused;
-    init_gear_bridge(0.1); /* 1 ms periods */
+    init_gear_bridge(0.1);
+    const double p = bridge.period_s;
     assert_int_equal(gs_hil_period_at(&bridge, 0.0), 0);
-    assert_int_equal(gs_hil_period_at(&bridge, 0.0005), 1);
-    assert_int_equal(gs_hil_period_at(&bridge, 0.001), 1);
-    assert_int_equal(gs_hil_period_at(&bridge, 0.0010009), 1); /* within the slack */
-    assert_int_equal(gs_hil_period_at(&bridge, 0.0010011), 2);
+    assert_int_equal(gs_hil_period_at(&bridge, 0.5 * p), 1);
+    assert_int_equal(gs_hil_period_at(&bridge, p), 1);
+    assert_int_equal(gs_hil_period_at(&bridge, p + 0.9e-6), 1); /* within the slack */
+    assert_int_equal(gs_hil_period_at(&bridge, p + 1.1e-6), 2);
     assert_int_equal(gs_hil_period_at(&bridge, -5.0), 0);
-    gs_hil_advance_to(&bridge, 0.0025);
+    gs_hil_advance_to(&bridge, 2.5 * p);
     assert_int_equal(bridge.counters.count[GS_HIL_COUNT_PERIODS], 3);
-    gs_hil_advance_to(&bridge, 0.001); /* passed: nothing */
+    gs_hil_advance_to(&bridge, p); /* passed: nothing */
     assert_int_equal(bridge.counters.count[GS_HIL_COUNT_PERIODS], 3);
-    assert_int_equal(gs_hil_periods_in(&bridge, 0.0025), 2); /* half to even */
-    assert_int_equal(gs_hil_periods_in(&bridge, 0.0035), 4);
+    assert_int_equal(gs_hil_periods_in(&bridge, 2.5 * p), 2); /* half to even */
+    assert_int_equal(gs_hil_periods_in(&bridge, 3.5 * p), 4);
     assert_int_equal(gs_hil_periods_in(&bridge, -1.0), 0);
 }
 

@@ -7,14 +7,7 @@
  * signals with bytes worked out by hand, plus a seeded random round trip of
  * raw values through every layout.
  */
-#include <setjmp.h>
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <math.h>
-#include <string.h>
-
-#include <cmocka.h>
+#include "test_common.h"
 
 #include "gearsim/hil.h"
 #include "gearsim/hil_dbc.h"
@@ -253,33 +246,25 @@ static void test_float_by_hand(void **unused)
     assert_int_equal(gs_hil_put_value(&d, HUGE_VAL, data), 1);
 }
 
-static uint64_t next(uint64_t *s)
-{
-    *s ^= *s << 13;
-    *s ^= *s >> 7;
-    *s ^= *s << 17;
-    return *s;
-}
-
 /* Random integer signals of every layout that fits 8 bytes: a raw value put
  * reads back, and the bits outside the signal stay as they were. */
 static void test_raw_round_trip_every_layout(void **unused)
 {
     (void)unused;
-    uint64_t seed = 42u;
+    test_rng seed = rng_seed(42u);
     for (int k = 0; k < 200000; ++k) {
         gs_hil_signal s = sig("R", 0, 1, 0, 1.0, -HUGE_VAL, HUGE_VAL, GS_HIL_ROLE_NONE, 0);
-        s.length = 1u + (unsigned)(next(&seed) % 64u);
-        s.is_signed = (int)(next(&seed) % 2u);
-        s.is_big_endian = (int)(next(&seed) % 2u);
-        unsigned first = (unsigned)(next(&seed) % (65u - s.length)); /* first bit from the frame's start */
+        s.length = 1u + (unsigned)(rng_next(&seed) % 64u);
+        s.is_signed = (int)(rng_next(&seed) % 2u);
+        s.is_big_endian = (int)(rng_next(&seed) % 2u);
+        unsigned first = (unsigned)(rng_next(&seed) % (65u - s.length)); /* first bit from the frame's start */
         s.start = s.is_big_endian ? (first / 8u) * 8u + 7u - first % 8u : first;
         uint8_t data[8], before[8];
         for (unsigned i = 0; i < 8; ++i) {
-            data[i] = before[i] = (uint8_t)next(&seed);
+            data[i] = before[i] = (uint8_t)rng_next(&seed);
         }
         uint64_t mask = s.length == 64u ? ~(uint64_t)0 : (((uint64_t)1 << s.length) - 1u);
-        uint64_t raw = next(&seed) & mask;
+        uint64_t raw = rng_next(&seed) & mask;
         gs_hil_put_raw(&s, raw, data);
         double v = gs_hil_signal_value(&s, data);
         int64_t expected = (int64_t)raw;
