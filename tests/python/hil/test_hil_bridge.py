@@ -9,7 +9,17 @@ import math
 from typing import Any
 
 import pytest
-from hil_helpers import Bridge, Peer, RigDbc, can, gear_model, rack_model, status_of, wrap_angle
+from hil_helpers import (
+    Bridge,
+    Peer,
+    RigDbc,
+    can,
+    gear_model,
+    rack_model,
+    roles_by_cantools,
+    status_of,
+    wrap_angle,
+)
 
 from gearsim.hil import BridgeError, Counters
 
@@ -21,9 +31,9 @@ def _sum_classes(c: Counters, pending: int = 0) -> int:
 def _check_against_reference(
     bridge: Bridge, peer: Peer, model: Any, periods: int, profile: Any, mode: str
 ) -> dict[int, int]:
-    """Peer sends profile(k) every 10 periods; every feedback value must equal
-    the reference rig, stepped directly with the same (decoded) commands, to
-    within half a DBC step. Returns frames received per ID."""
+    """Peer sends profile(k) every 10 periods; every feedback value, decoded by
+    cantools, must equal the reference rig, stepped directly with the same
+    (decoded) commands, to within half a DBC step. Returns frames received per ID."""
     dbc = peer.dbc
     ref = model.rig(dt=bridge.dt)
     frame = next(iter(dbc.commands.values()))
@@ -33,7 +43,7 @@ def _check_against_reference(
     for k in range(periods):
         if k % 10 == 0:
             msgs = peer.command(t=k * bridge.period, mode=mode, **profile(k))
-            held = dbc.decode_command(frame, msgs[0].data)
+            held = roles_by_cantools(frame, msgs[0].data)
         bridge.tick()
         for _ in range(bridge.substeps):
             res = ref.step(load=held["cmd.load"], **{drive: held[f"cmd.{drive}"]})
@@ -43,7 +53,7 @@ def _check_against_reference(
         for msg in peer.drain():
             seen[msg.arbitration_id] = seen.get(msg.arbitration_id, 0) + 1
             fb = dbc.by_key[(msg.arbitration_id, False)]
-            values = dbc.decode_feedback(fb, msg.data)
+            values = roles_by_cantools(fb, msg.data)
             for s in fb.signals:
                 role = s.role
                 if not role.startswith(("out.", "in.")):
@@ -304,7 +314,7 @@ def test_send_failures_are_counted(gear: Any, gear_dbc: RigDbc) -> None:
     bridge.advance(200)
     assert bridge.counters.tx_errors == 2
     status = [
-        gear_dbc.decode_feedback(gear_dbc.by_key[(m.arbitration_id, False)], m.data)
+        roles_by_cantools(gear_dbc.by_key[(m.arbitration_id, False)], m.data)
         for m in sent
         if m.arbitration_id == 0x210
     ]
