@@ -54,7 +54,9 @@ echo "package_check: top-level configure without cmocka stops, saying to install
 python=${PYTHON:-.venv/bin/python}
 [ -x "$python" ] || python=python3
 mkdir -p "$out/dist"
-"$python" setup.py -q sdist -d "$out/dist" >"$out/sdist.log" 2>&1 || { cat "$out/sdist.log"; echo "package_check: sdist failed"; exit 1; }
+# python -m build: the sdist as a user builds one, in an isolated environment
+# with the build requirements of pyproject.toml (not whatever .venv holds)
+"$python" -m build --sdist -o "$out/dist" . >"$out/sdist.log" 2>&1 || { cat "$out/sdist.log"; echo "package_check: sdist failed"; exit 1; }
 "$python" -m pip wheel -q --no-deps -w "$out/dist" "$out"/dist/gearsim-*.tar.gz >"$out/wheel.log" 2>&1 \
   || { cat "$out/wheel.log"; echo "package_check: building a wheel from the sdist failed"; exit 1; }
 "$python" tests/package/wheel_check.py "$out/dist"
