@@ -132,7 +132,7 @@ class FleetResult:
                 for k, v in (pop.get("drift") or {}).items()
                 if isinstance(v, dict) and v.get("drifting")
             ],
-            "errors": [{"unit": u, "error": e} for u, e in self.errors[:100]],
+            "error_units": [{"unit": u, "error": e} for u, e in self.errors[:100]],
             "dashboard": self.dashboard,
             "seconds": self.seconds,
         }
@@ -191,6 +191,27 @@ def _check_out(out: str, inputs: Sequence[str]) -> str:
 # ------------------------------------------------------------------ cluster
 
 
+def _check_scheduler(address: str) -> None:
+    """A tcp:// scheduler that does not answer: exit 2 before any work
+    (other protocols are left to Dask's own connect)."""
+    import socket
+    from urllib.parse import urlsplit
+
+    if not address.startswith("tcp://"):
+        return
+    try:
+        parts = urlsplit(address)
+        host, port = parts.hostname, parts.port or 8786
+    except ValueError:
+        raise FleetInputError(f"--scheduler {printable(address)}: not an address tcp://HOST:PORT") from None
+    try:
+        socket.create_connection((host, port), timeout=CONNECT_TIMEOUT_S).close()
+    except OSError as exc:
+        raise FleetInputError(
+            f"--scheduler {printable(address)}: cannot connect ({exc.strerror or exc})"
+        ) from None
+
+
 def _client(scheduler: str | None, workers: int | None):
     from distributed import Client, LocalCluster
 
@@ -204,24 +225,34 @@ def _client(scheduler: str | None, workers: int | None):
             ) from None
         return client, None
     n = workers or os.cpu_count() or 1
-    dashboard = ":0" if importlib.util.find_spec("bokeh") is not None else None
     cluster = LocalCluster(
         n_workers=n,
         threads_per_worker=1,
         processes=True,
-        dashboard_address=dashboard,
+        dashboard_address=":0",  # any free port: several runs may share a machine
         silence_logs=logging.ERROR,
     )
     return Client(cluster, set_as_default=False), cluster
 
 
-def _dashboard(client) -> str | None:
+def _dashboard(client, local: bool) -> str | None:
+    """The dashboard's link when it serves pages: the scheduler always
+    reports an HTTP service, but the pages need bokeh where it runs."""
     try:
-        if "dashboard" in client.scheduler_info().get("services", {}):
-            return str(client.dashboard_link)
+        if "dashboard" not in client.scheduler_info().get("services", {}):
+            return None
+        link = str(client.dashboard_link)
     except Exception:  # pragma: no cover - an old scheduler without the info
         return None
-    return None
+    if local:
+        return link if importlib.util.find_spec("bokeh") is not None else None
+    import urllib.request
+
+    try:
+        with urllib.request.urlopen(link, timeout=2.0) as reply:
+            return link if reply.status == 200 else None
+    except (OSError, ValueError):
+        return None
 
 
 class _Progress:
@@ -303,7 +334,7 @@ def _compute(
     client, cluster = _client(scheduler, workers)
     progress = None
     try:
-        dashboard = _dashboard(client)
+        dashboard = _dashboard(client, scheduler is None)
         threads = max(1, sum(client.nthreads().values()))
         if not quiet:
             where = scheduler or f"a local cluster of {threads} worker process(es)"
@@ -403,6 +434,8 @@ def run_fleet(
         _check_effects(opts.effects, start)
     task_opts = opts.task_options()  # a bad --input-filter: exit 2 here
     out = _check_out(out, [u.path for u in units] + [manifest, model_file])
+    if scheduler:
+        _check_scheduler(scheduler)
     os.makedirs(out, exist_ok=True)
     model_text = start.dumps()
     code = code_id()
