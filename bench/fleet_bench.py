@@ -83,7 +83,6 @@ def one_run(logs: str, model: str, out: str, workers: int) -> dict:
         options=FleetOptions(effects=EFFECTS),
         workers=workers,
         report=False,
-        quiet=True,
         progress=lambda s: first.append(time.perf_counter() - t0) if "to analyse" in s else None,
     )
     wall = time.perf_counter() - t0

@@ -249,3 +249,34 @@ def test_unreachable_scheduler_is_one_line(line, tmp_path):
     )
     assert proc.returncode == 2
     assert len(proc.stderr.strip().splitlines()) == 1 and "cannot connect" in proc.stderr, proc.stderr
+
+
+def test_an_interrupted_run_leaves_no_partial_output_and_resumes(line, tmp_path):
+    from gearsim.fleet.cache import Cache
+
+    specs, manifest, model = line
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    for s in specs[:16]:
+        shutil.copy(manifest.parent / f"{s.unit}.csv", logs)
+    out = tmp_path / "out"
+    cmd = [str(GEARSIM), "fleet", str(logs), "--model", str(model), "--out", str(out), "--add",
+           ",".join(H.EFFECTS), "--workers", "2", "--json", "--quiet"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + BOUND_S
+    while Cache.count(str(out / "cache.sqlite")) < 3 and time.monotonic() < deadline:
+        assert proc.poll() is None, proc.communicate()
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=BOUND_S)
+    kept = Cache.count(str(out / "cache.sqlite"))
+    if proc.returncode == 0:  # pragma: no cover - the run beat the signal
+        pytest.skip("the run finished before it could be interrupted")
+    assert proc.returncode == 130, stderr
+    assert stdout == ""
+    assert not (out / "units.parquet").exists() and not list(out.glob(".*.tmp"))
+    assert 3 <= kept < 16
+    again = subprocess.run(cmd, capture_output=True, text=True, timeout=BOUND_S)
+    assert again.returncode == 0, again.stderr
+    summary = json.loads(again.stdout)
+    assert summary["cached"] == kept and summary["computed"] == 16 - kept and summary["ok"] == 16
