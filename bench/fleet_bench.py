@@ -10,8 +10,9 @@ meshing_efficiency and load_offset, as scripts/fleet_demo.sh does.
 
 - units/s: units / wall time of gearsim.fleet.run_fleet with --no-report,
   cluster start-up included (reported apart: the time to the first task);
-- per-unit cost: the median of the rows' `seconds` (the analysis alone, on
-  the worker);
+- per-unit cost: the median of the rows' `seconds` and `cpu_seconds` (the
+  analysis alone, on the worker: wall and CPU time; the CPU time moves less
+  with other jobs on the machine);
 - per-task overhead: (wall x workers - sum of the rows' seconds) / units,
   i.e. what one task costs beyond its analysis (scheduling, transfer, the
   client's cache and Parquet writes, start-up spread over the run), and the
@@ -40,14 +41,16 @@ EFFECTS = ("coulomb_friction", "meshing_efficiency", "load_offset")
 
 
 def write_logs(folder: str, n: int) -> str:
+    import make_fleet_data as F
     import numpy as np
 
-    import make_fleet_data as F
     from gearsim.analysis import synthetic as S
     from gearsim.analysis import write_measurement
 
     rng = np.random.default_rng(7)
-    exc = S.excitation(F.SAMPLES, F.DT, max_speed=30.0, max_load=3.0, seed=F.CYCLE_SEED, temperature=None)
+    exc = S.excitation(
+        F.SAMPLES, F.DT, max_speed=30.0, max_load=3.0, seed=F.CYCLE_SEED, temperature=None
+    )
     for i in range(n):
         truth, sensors = F.unit_truth(i % F.UNITS, rng)
         meas = S.synthesize(truth, exc, sensors, seed=10_000 + i)
@@ -59,9 +62,17 @@ def write_logs(folder: str, n: int) -> str:
 
 def empty_task_round_trip(workers: int, count: int = 1000) -> float:
     """Seconds per no-op task, submitted all at once and gathered."""
+    import logging
+
     from distributed import Client, LocalCluster
 
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0") as cl:
+    with LocalCluster(
+        n_workers=workers,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=":0",
+        silence_logs=logging.CRITICAL,
+    ) as cl:
         with Client(cl) as client:
             client.gather(client.map(int, range(50)))  # warm
             t0 = time.perf_counter()
@@ -86,7 +97,9 @@ def one_run(logs: str, model: str, out: str, workers: int) -> dict:
         progress=lambda s: first.append(time.perf_counter() - t0) if "to analyse" in s else None,
     )
     wall = time.perf_counter() - t0
-    secs = pq.read_table(res.parquet, columns=["seconds"]).column(0).to_pylist()
+    tab = pq.read_table(res.parquet, columns=["seconds", "cpu_seconds"])
+    secs = tab.column(0).to_pylist()
+    cpu = tab.column(1).to_pylist()
     n = res.counts["units"]
     return {
         "workers": workers,
@@ -96,6 +109,7 @@ def one_run(logs: str, model: str, out: str, workers: int) -> dict:
         "startup_s": first[0] if first else float("nan"),
         "units_per_s": n / wall,
         "unit_cost_median_s": statistics.median(secs),
+        "unit_cpu_median_s": statistics.median(cpu),
         "overhead_per_task_s": (wall * workers - sum(secs)) / n,
     }
 
@@ -113,7 +127,9 @@ def main() -> int:
         os.makedirs(logs)
         t0 = time.perf_counter()
         model = write_logs(logs, args.units)
-        print(f"fleet bench: wrote {args.units} logs in {time.perf_counter() - t0:.1f} s", flush=True)
+        print(
+            f"fleet bench: wrote {args.units} logs in {time.perf_counter() - t0:.1f} s", flush=True
+        )
         rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
         for w in counts:
             r = one_run(logs, model, os.path.join(tmp, f"out{w}"), w)
@@ -121,7 +137,8 @@ def main() -> int:
             print(
                 f"fleet bench: {w} worker(s): {r['units']} units in {r['wall_s']:.1f} s = "
                 f"{r['units_per_s']:.2f} units/s (start-up {r['startup_s']:.1f} s); per unit "
-                f"{r['unit_cost_median_s'] * 1e3:.0f} ms of analysis (median), overhead "
+                f"{r['unit_cost_median_s'] * 1e3:.0f} ms of analysis (median; CPU "
+                f"{r['unit_cpu_median_s'] * 1e3:.0f} ms), overhead "
                 f"{r['overhead_per_task_s'] * 1e3:.0f} ms per task",
                 flush=True,
             )
@@ -131,7 +148,8 @@ def main() -> int:
         out["empty_task_s"] = empty_task_round_trip(max(counts))
     print(
         f"fleet bench: peak memory: client {out['client_peak_rss_mb']:.0f} MB (before the runs "
-        f"{out['client_rss_before_runs_mb']:.0f} MB), largest worker {out['worker_peak_rss_mb']:.0f} MB; "
+        f"{out['client_rss_before_runs_mb']:.0f} MB), largest worker "
+        f"{out['worker_peak_rss_mb']:.0f} MB; "
         f"an empty task: {out['empty_task_s'] * 1e3:.2f} ms"
     )
     if args.json:

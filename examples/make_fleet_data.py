@@ -55,7 +55,9 @@ def start_model():
     import gearsim
 
     return gearsim.Model(
-        "simple_gear", {"teeth_ratio": 3.0, "output_shaft_rotates": "opposite"}, {"follower_inertia": 0.05}
+        "simple_gear",
+        {"teeth_ratio": 3.0, "output_shaft_rotates": "opposite"},
+        {"follower_inertia": 0.05},
     )
 
 

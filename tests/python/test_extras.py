@@ -353,7 +353,13 @@ def test_table_matches_pyproject():
         # an extra may name another of gearsim's own ("gearsim[analysis]"), and a
         # requirement with an extra brings that extra's modules too
         reqs = [r for r in extras[extra] if not r.startswith("gearsim[")]
-        got = tuple(m for r in reqs for m in _REQUIREMENT_MODULES.get(r.split(">")[0], (_MODULE_OF.get(_distribution(r), _distribution(r)),)))
+        got = tuple(
+            m
+            for r in reqs
+            for m in _REQUIREMENT_MODULES.get(
+                r.split(">")[0], (_MODULE_OF.get(_distribution(r), _distribution(r)),)
+            )
+        )
         assert got == modules, extra
     assert "gearsim[analysis]" in extras["fleet"]
     # all: every extra but the test tooling, with the same pins
@@ -389,8 +395,24 @@ def test_hil_exports_resolve():
     assert out.stdout.strip() == "True True"
 
 
-@pytest.mark.parametrize("blocked, extra, module", [(("dask",), "fleet", "dask"), (("pyarrow",), "fleet", "pyarrow"), (OPTIONAL_MODULES, "analysis", "scipy")])
+@pytest.mark.parametrize(
+    "blocked, extra, module",
+    [
+        (("dask",), "fleet", "dask"),
+        (("pyarrow",), "fleet", "pyarrow"),
+        (OPTIONAL_MODULES, "analysis", "scipy"),
+    ],
+)
 def test_fleet_command_names_the_extra(tmp_path, blocked, extra, module):
-    argv = ["fleet", str(DEMO_CSV.parent), "--model", str(DEMO_MODEL), "--out", str(tmp_path / "out"), "--add", "coulomb_friction"]
+    argv = [
+        "fleet",
+        str(DEMO_CSV.parent),
+        "--model",
+        str(DEMO_MODEL),
+        "--out",
+        str(tmp_path / "out"),
+        "--add",
+        "coulomb_friction",
+    ]
     _expect_one_line(_cli_blocked(argv, blocked), "gearsim fleet", extra, module)
     assert list(tmp_path.iterdir()) == []

@@ -95,7 +95,9 @@ def unit_specs(n: int, defects: dict[int, str], seed: int = 2026) -> list[UnitSp
             eff -= 0.05
         elif d == "torque_sensor_offset":
             off = 0.03
-        out.append(UnitSpec(i, f"gx-{i:04d}", d, eff, coul, gap, off, 1000 + i, START + i * UNIT_PERIOD))
+        out.append(
+            UnitSpec(i, f"gx-{i:04d}", d, eff, coul, gap, off, 1000 + i, START + i * UNIT_PERIOD)
+        )
     return out
 
 

@@ -5,17 +5,15 @@ and without writing anything; the population's numbers on hand-made data."""
 from __future__ import annotations
 
 import math
-import os
 import shutil
 import subprocess
 import sys
 
-import fleet_helpers as H
 import numpy as np
 import pytest
 
 from gearsim.cli import main
-from gearsim.fleet import FleetInputError, Sample, find_units, population
+from gearsim.fleet import Sample, find_units, population
 from gearsim.fleet.units import unit_id_of
 
 
@@ -30,7 +28,9 @@ def small(line, tmp_path):
     man = logs / "manifest.csv"
     man.write_text(
         "unit,path,line,station,timestamp\n"
-        + "".join(f"{s.unit},{s.unit}.csv,L1,S1,2026-11-02T0{i}:00:00Z\n" for i, s in enumerate(specs[:4]))
+        + "".join(
+            f"{s.unit},{s.unit}.csv,L1,S1,2026-11-02T0{i}:00:00Z\n" for i, s in enumerate(specs[:4])
+        )
     )
     return logs, man, model
 
@@ -69,7 +69,10 @@ def test_units_from_a_directory_a_glob_and_a_manifest(small):
         ("unit,path\nA,a.csv\n,b.csv\n", "manifest.csv, line 3, column 'unit': empty"),
         ("unit,path\nA,a.csv\nA,b.csv\n", "line 3, column 'unit': 'A' already on line 2"),
         ("unit,file\nA,a.csv\n", "line 1: the manifest has no column 'path'"),
-        ("unit,path,timestamp\nA,a.csv,yesterday\n", "line 2, column 'timestamp': timestamp 'yesterday'"),
+        (
+            "unit,path,timestamp\nA,a.csv,yesterday\n",
+            "line 2, column 'timestamp': timestamp 'yesterday'",
+        ),
         (
             "unit,path,timestamp\nA,a.csv,2026-01-01T00:00Z\nB,b.csv,2026-01-01T00:00\n",
             "line 3, column 'timestamp': without a time zone, line 2 with",
@@ -84,7 +87,17 @@ def test_bad_manifest_rows_exit_2_naming_row_and_column(tmp_path, capsys, text, 
     man.write_text(text)
     out = tmp_path / "out"
     status, o, e = _cli(
-        ["fleet", "--manifest", str(man), "--model", str(line[2]), "--out", str(out), "--add", "coulomb_friction"],
+        [
+            "fleet",
+            "--manifest",
+            str(man),
+            "--model",
+            str(line[2]),
+            "--out",
+            str(out),
+            "--add",
+            "coulomb_friction",
+        ],
         capsys,
     )
     msg = _one_line(status, o, e)
@@ -112,7 +125,19 @@ def test_bad_fleet_inputs_exit_2(small, tmp_path, capsys):
         assert not out.exists(), argv
     bad_model = tmp_path / "bad.toml"
     bad_model.write_text("[rig]\nblock = 'simple_gear'\nfollower_inertia = -1\n")
-    status, o, e = _cli(["fleet", str(logs), "--add", "coulomb_friction", "--model", str(bad_model), "--out", str(out)], capsys)
+    status, o, e = _cli(
+        [
+            "fleet",
+            str(logs),
+            "--add",
+            "coulomb_friction",
+            "--model",
+            str(bad_model),
+            "--out",
+            str(out),
+        ],
+        capsys,
+    )
     assert "bad.toml" in _one_line(status, o, e)
 
 
@@ -120,10 +145,32 @@ def test_no_output_goes_among_the_inputs(small, capsys):
     logs, man, model = small
     before = {p: p.read_bytes() for p in logs.iterdir()}
     for out in (logs, logs.parent):  # the logs' own folder, or one holding them
-        status, o, e = _cli(["fleet", str(logs), "--model", str(model), "--out", str(out), "--add", "coulomb_friction"], capsys)
+        status, o, e = _cli(
+            [
+                "fleet",
+                str(logs),
+                "--model",
+                str(model),
+                "--out",
+                str(out),
+                "--add",
+                "coulomb_friction",
+            ],
+            capsys,
+        )
         assert "holds an input" in _one_line(status, o, e)
     status, o, e = _cli(
-        ["fleet", "--manifest", str(man), "--model", str(model), "--out", str(model.parent), "--add", "coulomb_friction"],
+        [
+            "fleet",
+            "--manifest",
+            str(man),
+            "--model",
+            str(model),
+            "--out",
+            str(model.parent),
+            "--add",
+            "coulomb_friction",
+        ],
         capsys,
     )
     assert "holds an input" in _one_line(status, o, e)
@@ -132,7 +179,10 @@ def test_no_output_goes_among_the_inputs(small, capsys):
 
 def test_help_lists_the_command():
     out = subprocess.run(
-        [sys.executable, "-m", "gearsim.cli", "fleet", "--help"], capture_output=True, text=True, timeout=120
+        [sys.executable, "-m", "gearsim.cli", "fleet", "--help"],
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
     assert out.returncode == 0 and "--scheduler" in out.stdout and "--manifest" in out.stdout
 
@@ -191,7 +241,10 @@ def test_false_outliers_of_a_normal_population_are_rare_and_a_planted_one_is_fou
     sigma (0.047 %), and a unit planted 8 sigma off is found by its metric."""
     rng = np.random.default_rng(seed)
     n = 2000
-    vals = {k: list(rng.normal(c, s, n)) for k, c, s in (("a", 1.5, 0.05), ("b", 0.8, 0.006), ("c", -3.0, 0.2))}
+    vals = {
+        k: list(rng.normal(c, s, n))
+        for k, c, s in (("a", 1.5, 0.05), ("b", 0.8, 0.006), ("c", -3.0, 0.2))
+    }
     err = list(np.abs(rng.normal(0.05, 0.001, n)))
     k = int(rng.integers(n))
     name = ["a", "b", "c"][seed % 3]
@@ -216,7 +269,12 @@ def test_drift_slope_of_a_trend_with_outliers():
     a = 2.0 + 0.03 * days + 0.01 * rng.standard_normal(n)
     a[[10, 50, 90]] += 1.0  # outliers do not set the trend
     samples = [
-        Sample(f"u{i}", {"a": float(a[i]), "b": float(rng.normal())}, 0.05 + 0.001 * rng.normal(), t0 + timedelta(days=float(days[i])))
+        Sample(
+            f"u{i}",
+            {"a": float(a[i]), "b": float(rng.normal())},
+            0.05 + 0.001 * rng.normal(),
+            t0 + timedelta(days=float(days[i])),
+        )
         for i in range(n)
     ]
     pop = population(samples)

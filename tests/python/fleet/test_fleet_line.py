@@ -71,7 +71,9 @@ def test_population_numbers_are_median_and_mad(line_run):
         assert math.isclose(st["sigma"], 1.4826 * mad, rel_tol=1e-12)
         z = (x - med) / (1.4826 * mad)
         out = df["unit"][np.abs(z) > line_run.population["threshold"]]
-        flagged = {o["unit"] for o in line_run.outliers if any(r["metric"] == name for r in o["reasons"])}
+        flagged = {
+            o["unit"] for o in line_run.outliers if any(r["metric"] == name for r in o["reasons"])
+        }
         assert set(out) == flagged, name
 
 

@@ -23,7 +23,7 @@ import pytest
 from gearsim.fleet import FleetOptions, run_fleet
 
 #: columns that say where or when a row was computed, not what
-RUN_COLUMNS = {"worker", "seconds", "from_cache", "path"}
+RUN_COLUMNS = {"worker", "seconds", "cpu_seconds", "from_cache", "path"}
 #: columns that depend on the population a unit is judged in
 POPULATION_COLUMNS = {"outlier", "outlier_by", "outlier_z", "outlier_reasons"}
 DASK = Path(sys.executable).with_name("dask")
@@ -42,8 +42,10 @@ def _same_rows(a, b, units, skip=RUN_COLUMNS | POPULATION_COLUMNS):
         ra, rb = a.loc[u, cols], b.loc[u, cols]
         for c in cols:
             va, vb = ra[c], rb[c]
-            same = repr(list(va)) == repr(list(vb)) if hasattr(va, "__len__") and not isinstance(va, str) else (
-                (va != va and vb != vb) or va == vb or repr(va) == repr(vb)
+            same = (
+                repr(list(va)) == repr(list(vb))
+                if hasattr(va, "__len__") and not isinstance(va, str)
+                else ((va != va and vb != vb) or va == vb or repr(va) == repr(vb))
             )
             assert same, (u, c, va, vb)
 
@@ -55,18 +57,25 @@ def _bad_logs(folder: Path, good: Path) -> dict[str, str]:
     cut = "".join(lines[:200]) + lines[200][: len(lines[200]) // 3]
     (folder / "bad-truncated.csv").write_text(cut)
     (folder / "bad-binary.csv").write_bytes(bytes(range(256)) * 40)
-    (folder / "bad-columns.csv").write_text("t,speed,torque\n" + "".join(f"{i * 1e-3},1,2\n" for i in range(100)))
+    (folder / "bad-columns.csv").write_text(
+        "t,speed,torque\n" + "".join(f"{i * 1e-3},1,2\n" for i in range(100))
+    )
     (folder / "bad-empty.csv").write_bytes(b"")
     (folder / "bad-header-only.csv").write_text(lines[0])
-    (folder / "bad-nan.csv").write_text("".join(lines[:50]) + lines[50].replace(lines[50].split(",")[2], "nan", 1) + "".join(lines[51:300]))
+    (folder / "bad-nan.csv").write_text(
+        "".join(lines[:50])
+        + lines[50].replace(lines[50].split(",")[2], "nan", 1)
+        + "".join(lines[51:300])
+    )
     gz = gzip.compress(text.encode(), mtime=0)
     (folder / "bad-truncated-gz.csv.gz").write_bytes(gz[: len(gz) // 2])
     # a rack's log in a gear fleet: the model does not fit the rig
     import dataclasses
 
     sys.path.insert(0, str(Path(H.__file__).parent.parent / "analysis"))
-    from gearsim.analysis import write_measurement
     from independent import generate
+
+    from gearsim.analysis import write_measurement
 
     rack = generate("rack_pinion", ("coulomb_friction",), duration_s=0.5, seed=3)
     write_measurement(folder / "bad-rack.csv", rack.measurement)
@@ -94,7 +103,15 @@ def test_bad_logs_become_error_rows_and_a_grown_folder_only_does_the_new(line, t
         shutil.copy(manifest.parent / f"{s.unit}.csv", mixed)
     expect = _bad_logs(mixed, manifest.parent / f"{specs[0].unit}.csv")
     opts = FleetOptions(effects=H.EFFECTS)
-    ref = run_fleet(str(good), model=str(model), out=str(tmp_path / "ref"), options=opts, workers=2, quiet=True, report=False)
+    ref = run_fleet(
+        str(good),
+        model=str(model),
+        out=str(tmp_path / "ref"),
+        options=opts,
+        workers=2,
+        quiet=True,
+        report=False,
+    )
     out = tmp_path / "out"
     res = run_fleet(str(mixed), model=str(model), out=str(out), options=opts, workers=2, quiet=True)
     assert res.counts["units"] == 18 and res.counts["ok"] == 10 and res.counts["errors"] == 8
@@ -109,7 +126,15 @@ def test_bad_logs_become_error_rows_and_a_grown_folder_only_does_the_new(line, t
     # the folder grows by two logs: only they are analysed
     for s in specs[10:12]:
         shutil.copy(manifest.parent / f"{s.unit}.csv", mixed)
-    again = run_fleet(str(mixed), model=str(model), out=str(out), options=opts, workers=2, quiet=True, report=False)
+    again = run_fleet(
+        str(mixed),
+        model=str(model),
+        out=str(out),
+        options=opts,
+        workers=2,
+        quiet=True,
+        report=False,
+    )
     assert again.counts["cached"] == 18 and again.counts["computed"] == 2
     c = _frame(again.parquet)
     assert c.loc[[s.unit for s in specs[:10]], "from_cache"].all()
@@ -117,8 +142,13 @@ def test_bad_logs_become_error_rows_and_a_grown_folder_only_does_the_new(line, t
     _same_rows(b, c, list(expect) + [s.unit for s in specs[:10]])
     # another option is another key: nothing from the cache
     other = run_fleet(
-        str(good), model=str(model), out=str(out), options=FleetOptions(effects=H.EFFECTS[:2]),
-        workers=2, quiet=True, report=False,
+        str(good),
+        model=str(model),
+        out=str(out),
+        options=FleetOptions(effects=H.EFFECTS[:2]),
+        workers=2,
+        quiet=True,
+        report=False,
     )
     assert other.counts["cached"] == 0
     assert not list(out.glob(".*.tmp"))  # no temporary file left
@@ -126,7 +156,9 @@ def test_bad_logs_become_error_rows_and_a_grown_folder_only_does_the_new(line, t
 
 def _start(cmd, log: Path, env) -> subprocess.Popen:
     fh = open(log, "w")
-    return subprocess.Popen(cmd, stdout=fh, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+    return subprocess.Popen(
+        cmd, stdout=fh, stderr=subprocess.STDOUT, env=env, start_new_session=True
+    )
 
 
 def _stop(proc: subprocess.Popen) -> None:
@@ -149,8 +181,17 @@ def cluster(tmp_path):
     try:
         procs.append(
             _start(
-                [str(DASK), "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                 "--scheduler-file", str(info)],
+                [
+                    str(DASK),
+                    "scheduler",
+                    "--host",
+                    "127.0.0.1",
+                    "--port",
+                    "0",
+                    "--no-dashboard",
+                    "--scheduler-file",
+                    str(info),
+                ],
                 tmp_path / "scheduler.log",
                 env,
             )
@@ -163,8 +204,17 @@ def cluster(tmp_path):
         for name in ("w1", "w2"):
             workers.append(
                 _start(
-                    [str(DASK), "worker", address, "--nthreads", "1", "--no-nanny", "--no-dashboard",
-                     "--name", name],
+                    [
+                        str(DASK),
+                        "worker",
+                        address,
+                        "--nthreads",
+                        "1",
+                        "--no-nanny",
+                        "--no-dashboard",
+                        "--name",
+                        name,
+                    ],
                     tmp_path / f"{name}.log",
                     env,
                 )
@@ -182,13 +232,32 @@ def cluster(tmp_path):
 
 def _fleet_cli(manifest, model, out, address, extra=()):
     return subprocess.Popen(
-        [str(GEARSIM), "fleet", "--manifest", str(manifest), "--model", str(model), "--out", str(out),
-         "--add", ",".join(H.EFFECTS), "--scheduler", address, "--json", "--quiet", *extra],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        [
+            str(GEARSIM),
+            "fleet",
+            "--manifest",
+            str(manifest),
+            "--model",
+            str(model),
+            "--out",
+            str(out),
+            "--add",
+            ",".join(H.EFFECTS),
+            "--scheduler",
+            address,
+            "--json",
+            "--quiet",
+            *extra,
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
     )
 
 
-def test_distributed_run_equals_the_local_one_even_with_a_worker_killed(line, line_run, cluster, tmp_path):
+def test_distributed_run_equals_the_local_one_even_with_a_worker_killed(
+    line, line_run, cluster, tmp_path
+):
     from gearsim.fleet.cache import Cache
 
     specs, manifest, model = line
@@ -196,7 +265,9 @@ def test_distributed_run_equals_the_local_one_even_with_a_worker_killed(line, li
     sub = tmp_path / "manifest.csv"
     rows = manifest.read_text().splitlines(keepends=True)
     n = 24
-    sub.write_text(rows[0] + "".join(r.replace(",gx-", f",{manifest.parent}/gx-", 1) for r in rows[1 : n + 1]))
+    sub.write_text(
+        rows[0] + "".join(r.replace(",gx-", f",{manifest.parent}/gx-", 1) for r in rows[1 : n + 1])
+    )
     local = _frame(line_run.parquet)
     units = [s.unit for s in specs[:n]]
 
@@ -243,12 +314,27 @@ def test_unreachable_scheduler_is_one_line(line, tmp_path):
     port = s.getsockname()[1]
     s.close()  # nobody listens there now
     proc = subprocess.run(
-        [str(GEARSIM), "fleet", str(manifest.parent / "gx-000*.csv"), "--model", str(model), "--out",
-         str(tmp_path / "o"), "--add", "coulomb_friction", "--scheduler", f"tcp://127.0.0.1:{port}"],
-        capture_output=True, text=True, timeout=BOUND_S,
+        [
+            str(GEARSIM),
+            "fleet",
+            str(manifest.parent / "gx-000*.csv"),
+            "--model",
+            str(model),
+            "--out",
+            str(tmp_path / "o"),
+            "--add",
+            "coulomb_friction",
+            "--scheduler",
+            f"tcp://127.0.0.1:{port}",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=BOUND_S,
     )
     assert proc.returncode == 2
-    assert len(proc.stderr.strip().splitlines()) == 1 and "cannot connect" in proc.stderr, proc.stderr
+    assert (
+        len(proc.stderr.strip().splitlines()) == 1 and "cannot connect" in proc.stderr
+    ), proc.stderr
 
 
 def test_an_interrupted_run_leaves_no_partial_output_and_resumes(line, tmp_path):
@@ -260,8 +346,21 @@ def test_an_interrupted_run_leaves_no_partial_output_and_resumes(line, tmp_path)
     for s in specs[:16]:
         shutil.copy(manifest.parent / f"{s.unit}.csv", logs)
     out = tmp_path / "out"
-    cmd = [str(GEARSIM), "fleet", str(logs), "--model", str(model), "--out", str(out), "--add",
-           ",".join(H.EFFECTS), "--workers", "2", "--json", "--quiet"]
+    cmd = [
+        str(GEARSIM),
+        "fleet",
+        str(logs),
+        "--model",
+        str(model),
+        "--out",
+        str(out),
+        "--add",
+        ",".join(H.EFFECTS),
+        "--workers",
+        "2",
+        "--json",
+        "--quiet",
+    ]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + BOUND_S
     while Cache.count(str(out / "cache.sqlite")) < 3 and time.monotonic() < deadline:

@@ -88,7 +88,9 @@ def _configure(p: argparse.ArgumentParser) -> None:
         help="a CSV with the columns unit and path (relative to the manifest), optionally line, "
         "station, timestamp (ISO 8601 or seconds since 1970)",
     )
-    p.add_argument("--model", required=True, metavar="MODEL.toml", help="the start model of every unit")
+    p.add_argument(
+        "--model", required=True, metavar="MODEL.toml", help="the start model of every unit"
+    )
     p.add_argument(
         "--out",
         required=True,
@@ -110,7 +112,11 @@ def _configure(p: argparse.ArgumentParser) -> None:
         help="run the full diagnose rounds on every unit instead of a fixed list",
     )
     p.add_argument(
-        "--rounds", type=_count(1), default=3, metavar="N", help="with --diagnose: at most N rounds (default 3)"
+        "--rounds",
+        type=_count(1),
+        default=3,
+        metavar="N",
+        help="with --diagnose: at most N rounds (default 3)",
     )
     where = p.add_mutually_exclusive_group()
     where.add_argument(
@@ -132,7 +138,9 @@ def _configure(p: argparse.ArgumentParser) -> None:
         metavar="Z",
         help=f"robust z-score beyond which a unit is an outlier (default {THRESHOLD:g})",
     )
-    p.add_argument("--refresh", action="store_true", help="analyse every unit again, ignoring the cache")
+    p.add_argument(
+        "--refresh", action="store_true", help="analyse every unit again, ignoring the cache"
+    )
     p.add_argument("--no-report", action="store_true", help="write no HTML report")
     p.add_argument("--json", action="store_true", help="print exactly one JSON object on stdout")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
@@ -183,7 +191,10 @@ def _print(res) -> None:
             print(f"  {o['unit']:24s} by {by:34s} z = {o['z']:+.1f}")
     for name, d in (res.population.get("drift") or {}).items():
         if isinstance(d, dict) and d.get("drifting"):
-            print(f"drifts: {name}: {d['slope_per_day']:+.4g} per day ({d['change_sigmas']:+.1f} sigma over the span)")
+            print(
+                f"drifts: {name}: {d['slope_per_day']:+.4g} per day "
+                f"({d['change_sigmas']:+.1f} sigma over the span)"
+            )
     for unit, err in res.errors[:10]:
         print(f"error: {unit}: {err}")
     if len(res.errors) > 10:
@@ -196,7 +207,9 @@ def _run(args: argparse.Namespace) -> int:
     from .units import FleetInputError
 
     if (args.source is None) == (args.manifest is None):
-        raise FleetInputError("give the logs: a directory or glob, or --manifest UNITS.csv (one of them)")
+        raise FleetInputError(
+            "give the logs: a directory or glob, or --manifest UNITS.csv (one of them)"
+        )
     effects = _effects(args.add)
     if not effects and not args.diagnose:
         raise FleetInputError("say what to fit: --add EFFECT[,EFFECT...] or --diagnose")

@@ -161,10 +161,17 @@ def population(
         if reasons:
             reasons.sort(key=lambda r: -abs(r["z"]))
             out["outliers"].append(
-                {"unit": s.unit, "by": reasons[0]["metric"], "z": reasons[0]["z"], "reasons": reasons}
+                {
+                    "unit": s.unit,
+                    "by": reasons[0]["metric"],
+                    "z": reasons[0]["z"],
+                    "reasons": reasons,
+                }
             )
     out["outliers"].sort(key=lambda o: -abs(o["z"]))
-    out["drift"] = _drift(samples, metrics, zs, stats | {REMAINING_ERROR: out["remaining_error"]}, threshold)
+    out["drift"] = _drift(
+        samples, metrics, zs, stats | {REMAINING_ERROR: out["remaining_error"]}, threshold
+    )
     return out
 
 

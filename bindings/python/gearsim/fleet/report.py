@@ -118,20 +118,29 @@ def _fig_histograms(plt, samples, pop, metrics):
         m, s = st["median"], st["sigma"]
         ax.axvline(m, color="k", lw=1)
         if s > 0:
-            for k in ((1,) if name == REMAINING_ERROR else (-1, 1)):
+            for k in (1,) if name == REMAINING_ERROR else (-1, 1):
                 ax.axvline(m + k * thr * s, color="#c00", lw=0.8, ls="--")
         flagged = [
             (x[i], s_.unit)
             for i, s_ in enumerate(samples)
-            if s_.unit in out_units and any(r["metric"] == name for r in out_units[s_.unit]["reasons"])
+            if s_.unit in out_units
+            and any(r["metric"] == name for r in out_units[s_.unit]["reasons"])
         ]
         for v, u in flagged[:12]:
             ax.plot([v], [0], marker="v", color="#c00", ms=8, clip_on=False)
-            ax.annotate(u, (v, 0), xytext=(0, 10), textcoords="offset points", fontsize=7,
-                        color="#c00", rotation=60, ha="left")
+            ax.annotate(
+                u,
+                (v, 0),
+                xytext=(0, 10),
+                textcoords="offset points",
+                fontsize=7,
+                color="#c00",
+                rotation=60,
+                ha="left",
+            )
         ax.set_title(_label(name, pop), fontsize=9)
         ax.tick_params(labelsize=8)
-    for ax in list(axes.flat)[len(metrics):]:
+    for ax in list(axes.flat)[len(metrics) :]:
         ax.axis("off")
     fig.suptitle(
         f"per parameter: median (black), median +- {thr:g} robust sigma (red, dashed), "
@@ -151,8 +160,14 @@ def _fig_scatter(plt, samples, pop):
     ax.scatter(x[~is_out], y[~is_out], s=10, color="#1f77b4", label="units")
     ax.scatter(x[is_out], y[is_out], s=28, color="#c00", marker="x", label="outliers")
     for i in np.nonzero(is_out)[0][:20]:
-        ax.annotate(samples[i].unit, (x[i], y[i]), fontsize=7, color="#c00",
-                    xytext=(3, 3), textcoords="offset points")
+        ax.annotate(
+            samples[i].unit,
+            (x[i], y[i]),
+            fontsize=7,
+            color="#c00",
+            xytext=(3, 3),
+            textcoords="offset points",
+        )
     ax.set_xlabel(_label(a, pop))
     ax.set_ylabel(_label(b, pop))
     ax.grid(alpha=0.3)
@@ -170,8 +185,9 @@ def _fig_errors(plt, samples):
     fig, ax = plt.subplots(figsize=(9, 3.8))
     if both.size:
         bins = np.geomspace(both.min() * 0.9, both.max() * 1.1, 50)
-        ax.hist(before[np.isfinite(before)], bins=bins, alpha=0.6, label="start model",
-                color="#1f77b4")
+        ax.hist(
+            before[np.isfinite(before)], bins=bins, alpha=0.6, label="start model", color="#1f77b4"
+        )
         ax.hist(after[np.isfinite(after)], bins=bins, alpha=0.6, label="fitted", color="#2ca02c")
         ax.set_xscale("log")
     ax.set_xlabel("nrmse (mean over the outputs)")
@@ -214,22 +230,34 @@ def _fig_drift(plt, samples, pop, metrics):
             ax.plot(d[far], np.clip(v[far], lo, hi), "x", ms=6, color="#c00")
         win = max(5, len(d) // 20)
         if len(d) >= win:
-            med = np.array([np.median(v[max(0, i - win // 2): i + win // 2 + 1]) for i in range(len(d))])
+            med = np.array(
+                [np.median(v[max(0, i - win // 2) : i + win // 2 + 1]) for i in range(len(d))]
+            )
             ax.plot(d, med, color="k", lw=1, label=f"rolling median ({win} units)")
         st = drift[name]
         centre = float(np.median(v - st["slope_per_day"] * d)) if len(d) else 0.0
-        ax.plot(d, centre + st["slope_per_day"] * d, color="#c00" if st["drifting"] else "#999",
-                lw=1.2, ls="--", label="Theil-Sen trend")
+        ax.plot(
+            d,
+            centre + st["slope_per_day"] * d,
+            color="#c00" if st["drifting"] else "#999",
+            lw=1.2,
+            ls="--",
+            label="Theil-Sen trend",
+        )
         flag = "DRIFTS: " if st["drifting"] else ""
-        ax.set_title(f"{flag}{_label(name, pop)}", fontsize=9,
-                     color="#c00" if st["drifting"] else "k")
+        ax.set_title(
+            f"{flag}{_label(name, pop)}", fontsize=9, color="#c00" if st["drifting"] else "k"
+        )
         ax.tick_params(labelsize=8)
         ax.set_xlabel("days since the first unit", fontsize=8)
-    for ax in list(axes.flat)[len(metrics):]:
+    for ax in list(axes.flat)[len(metrics) :]:
         ax.axis("off")
     axes.flat[0].legend(fontsize=7)
-    fig.suptitle("parameters against time; outliers (red x, at the edge when beyond it) are left out of "
-                 "the trend", fontsize=10)
+    fig.suptitle(
+        "parameters against time; outliers (red x, at the edge when beyond it) are left out of "
+        "the trend",
+        fontsize=10,
+    )
     fig.tight_layout()
     return fig
 
@@ -251,15 +279,28 @@ def _overlay(plt, unit, row, start, options):
     c0 = compare(start, meas, inputs, regimes=False)
     c1 = compare(fitted, meas, inputs, regimes=False)
     outs = list(c0.outputs)
-    fig, axes = plt.subplots(len(outs), 1, figsize=(11, 3.2 * len(outs)), sharex=True, squeeze=False)
+    fig, axes = plt.subplots(
+        len(outs), 1, figsize=(11, 3.2 * len(outs)), sharex=True, squeeze=False
+    )
     s = max(1, int(math.ceil(meas.n / _MAX_POINTS)))
     t = meas.time[::s]
     for ax, o in zip(axes[:, 0], outs, strict=True):
         ax.plot(t, meas[o][::s], color="0.55", lw=0.8, label="measured")
-        ax.plot(t, c0.sim.outputs[o][::s], color="#1f77b4", lw=0.8, ls="--",
-                label=f"start model (nrmse {c0.outputs[o].nrmse:.4f})")
-        ax.plot(t, c1.sim.outputs[o][::s], color="#2ca02c", lw=0.9,
-                label=f"fitted to this unit (nrmse {c1.outputs[o].nrmse:.4f})")
+        ax.plot(
+            t,
+            c0.sim.outputs[o][::s],
+            color="#1f77b4",
+            lw=0.8,
+            ls="--",
+            label=f"start model (nrmse {c0.outputs[o].nrmse:.4f})",
+        )
+        ax.plot(
+            t,
+            c1.sim.outputs[o][::s],
+            color="#2ca02c",
+            lw=0.9,
+            label=f"fitted to this unit (nrmse {c1.outputs[o].nrmse:.4f})",
+        )
         ax.set_ylabel(f"{o} [{meas.spec.unit(o)}]")
         ax.grid(alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)
@@ -274,7 +315,8 @@ def _unit_page(unit, row, outlier, pop, png: bytes | None, problem: str | None) 
         f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>unit {_e(unit.unit)}</title>"
         f"<style>{_CSS}</style></head><body><h1>unit {_e(unit.unit)}</h1>",
         f"<p>log <code>{_e(unit.path)}</code>; nrmse {_num(row.get('nrmse_before'))} &rarr; "
-        f"{_num(row.get('nrmse_after'))}; effects fitted: {_e(', '.join(row.get('effects_fitted') or []))}"
+        f"{_num(row.get('nrmse_after'))}; effects fitted: "
+        f"{_e(', '.join(row.get('effects_fitted') or []))}"
         "; <a href='../fleet.html'>back to the fleet</a></p>",
         "<table><tr><th class='l'>metric</th><th>value</th><th>std</th><th>population median</th>"
         "<th>robust z</th></tr>",
@@ -407,7 +449,11 @@ def write_fleet_report(
         f"<style>{_CSS}</style></head><body><h1>gearsim fleet: {counts['units']} units</h1>",
         f"<p>{counts['ok']} analysed, {counts['errors']} with errors"
         f" ({counts['cached']} from the cache). Mode: {_e(options['mode'])}"
-        + (f", effects fitted in order: {_e(', '.join(options['effects']))}" if options["effects"] else "")
+        + (
+            f", effects fitted in order: {_e(', '.join(options['effects']))}"
+            if options["effects"]
+            else ""
+        )
         + f". Start model: {_e(start.block)}. Results: <code>units.parquet</code>, "
         "<code>population.json</code>.</p>",
     ]
@@ -431,14 +477,18 @@ def write_fleet_report(
             h.append("<h2>Drift against time</h2>")
             h.append(_img(_png(plt, _fig_drift(plt, samples, pop, metrics)), "drift"))
     if errors:
-        h.append(f"<h2>Units with errors ({len(errors)})</h2><table><tr><th class='l'>unit</th>"
-                 "<th class='l'>error</th></tr>")
+        h.append(
+            f"<h2>Units with errors ({len(errors)})</h2><table><tr><th class='l'>unit</th>"
+            "<th class='l'>error</th></tr>"
+        )
         for unit, err in errors[:MAX_ERRORS]:
             h.append(f"<tr><td class='l'>{_e(unit)}</td><td class='l'>{_e(err)}</td></tr>")
         h.append("</table>")
         if len(errors) > MAX_ERRORS:
-            h.append(f"<p class='small'>... and {len(errors) - MAX_ERRORS} more: see units.parquet "
-                     "(status = 'error').</p>")
+            h.append(
+                f"<p class='small'>... and {len(errors) - MAX_ERRORS} more: see units.parquet "
+                "(status = 'error').</p>"
+            )
     h.append(
         f"<p class='small'>Robust z = (value - median) / (1.4826 MAD); a unit is an outlier when "
         f"|z| &gt; {pop['threshold']:g} for a parameter, or z &gt; {pop['threshold']:g} for its "

@@ -123,9 +123,7 @@ class FleetResult:
             "population": self.population_file,
             "report": self.report,
             **self.counts,
-            "outliers": [
-                {"unit": o["unit"], "by": o["by"], "z": o["z"]} for o in self.outliers
-            ],
+            "outliers": [{"unit": o["unit"], "by": o["by"], "z": o["z"]} for o in self.outliers],
             "threshold": pop.get("threshold"),
             "drifting": [
                 k
@@ -145,7 +143,7 @@ def _load_model(model: Any):
     from ..analysis import AnalysisModel, load_model
     from ..errors import ModelFileError
 
-    if isinstance(model, (str, os.PathLike)):
+    if isinstance(model, str | os.PathLike):
         path = os.fspath(model)
         if not os.path.exists(path):
             raise ModelFileError("no such file", file=printable(path, limit=200))
@@ -203,7 +201,9 @@ def _check_scheduler(address: str) -> None:
         parts = urlsplit(address)
         host, port = parts.hostname, parts.port or 8786
     except ValueError:
-        raise FleetInputError(f"--scheduler {printable(address)}: not an address tcp://HOST:PORT") from None
+        raise FleetInputError(
+            f"--scheduler {printable(address)}: not an address tcp://HOST:PORT"
+        ) from None
     try:
         socket.create_connection((host, port), timeout=CONNECT_TIMEOUT_S).close()
     except OSError as exc:
@@ -230,7 +230,7 @@ def _client(scheduler: str | None, workers: int | None):
         threads_per_worker=1,
         processes=True,
         dashboard_address=":0",  # any free port: several runs may share a machine
-        silence_logs=logging.ERROR,
+        silence_logs=logging.CRITICAL,  # a worker's shutdown chatter is not the user's
     )
     return Client(cluster, set_as_default=False), cluster
 
@@ -330,7 +330,7 @@ def _compute(
     foreign = 0
     dist_log = logging.getLogger("distributed")
     level = dist_log.level
-    dist_log.setLevel(logging.ERROR)  # a lost worker is handled, not an error of ours
+    dist_log.setLevel(logging.CRITICAL)  # a lost worker is handled, not an error of ours
     client, cluster = _client(scheduler, workers)
     progress = None
     try:
@@ -589,15 +589,13 @@ def _finish(out, units, rows, start, model_file, task_opts, threshold, report, s
             errors=errors,
             say=say,
         )
-    return FleetResult(
-        out, parquet, pop_file, html, pop, counts, pop["outliers"], errors=errors
-    )
+    return FleetResult(out, parquet, pop_file, html, pop, counts, pop["outliers"], errors=errors)
 
 
 def _json_safe(obj: Any) -> Any:
     if isinstance(obj, dict):
         return {str(k): _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
+    if isinstance(obj, list | tuple):
         return [_json_safe(v) for v in obj]
     if isinstance(obj, float):
         return obj if math.isfinite(obj) else None

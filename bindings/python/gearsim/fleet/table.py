@@ -52,6 +52,7 @@ FIXED_COLUMNS: tuple[tuple[str, str], ...] = (
     ("code_id", "string"),
     ("worker", "string"),
     ("seconds", "float64"),
+    ("cpu_seconds", "float64"),
     ("from_cache", "bool"),
     ("model", "string"),
 )
@@ -86,7 +87,10 @@ def schema(outputs: list[str], params: list[str], aware: bool, meta: dict[str, A
 
     fields = [pa.field(n, _type(k, aware)) for n, k in FIXED_COLUMNS]
     for o in outputs:
-        fields += [pa.field(f"nrmse_before_{o}", pa.float64()), pa.field(f"nrmse_after_{o}", pa.float64())]
+        fields += [
+            pa.field(f"nrmse_before_{o}", pa.float64()),
+            pa.field(f"nrmse_after_{o}", pa.float64()),
+        ]
     for p in params:
         fields += [pa.field(param_column(p), pa.float64()), pa.field(std_column(p), pa.float64())]
     return pa.schema(fields, metadata={"gearsim.fleet": json.dumps(meta)})

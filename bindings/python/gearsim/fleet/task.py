@@ -61,7 +61,7 @@ def parse_input_filter(value: Any) -> float | str | None:
 
     if value is None:
         return None
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
+    if isinstance(value, int | float) and not isinstance(value, bool):
         hz = float(value)
     else:
         v = str(value).strip().lower()
@@ -256,6 +256,7 @@ def analyse_unit(task: dict) -> dict:
     "validation", "validation_fraction", "input_filter", "columns",
     "resample", "max_gap", "max_samples"}}."""
     t0 = time.perf_counter()
+    c0 = time.process_time()
     row: dict[str, Any] = {
         "status": "error",
         "error": None,
@@ -286,4 +287,5 @@ def analyse_unit(task: dict) -> dict:
         row["error"] = _one_line(exc)
         row["error_kind"] = "internal" if isinstance(exc, MemoryError) else _kind(exc)
     row["seconds"] = time.perf_counter() - t0
+    row["cpu_seconds"] = time.process_time() - c0
     return row

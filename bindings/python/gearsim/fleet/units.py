@@ -153,7 +153,9 @@ def _read_manifest(path: str) -> list[Unit]:
     try:
         raw = open(path, "rb").read()
     except OSError as exc:
-        raise FleetInputError(f"{shown}: cannot read the manifest ({exc.strerror or exc})") from None
+        raise FleetInputError(
+            f"{shown}: cannot read the manifest ({exc.strerror or exc})"
+        ) from None
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -186,7 +188,7 @@ def _read_manifest(path: str) -> list[Unit]:
                 f"{shown}, line {lineno}: {len(row)} cells, the header has {len(names)}"
             )
 
-        def cell(name: str) -> str | None:
+        def cell(name: str, row: list[str] = row) -> str | None:
             v = row[col[name]].strip() if name in col else ""
             return v or None
 
