@@ -268,7 +268,15 @@ class _Progress:
         if not quiet and total and sys.stderr.isatty() and importlib.util.find_spec("tqdm"):
             from tqdm import tqdm
 
-            self.bar = tqdm(total=total, unit="unit", file=sys.stderr, dynamic_ncols=True)
+            import shutil
+
+            width = shutil.get_terminal_size((80, 24)).columns
+            self.bar = tqdm(
+                total=total,
+                unit="unit",
+                file=sys.stderr,
+                ncols=min(width, 100) if width >= 40 else 80,
+            )
 
     def update(self, ok: bool) -> None:
         self.done += 1
