@@ -266,9 +266,9 @@ class _Progress:
         self.bar = None
         self.last = time.monotonic()
         if not quiet and total and sys.stderr.isatty() and importlib.util.find_spec("tqdm"):
-            from tqdm import tqdm
-
             import shutil
+
+            from tqdm import tqdm
 
             width = shutil.get_terminal_size((80, 24)).columns
             self.bar = tqdm(
