@@ -21,7 +21,8 @@ manifest.csv gives every unit's line (L1/L2), station and end-of-line time.
 The logs are made by gearsim's own C core (like the walkthrough's demo data):
 they show the tool, they do not validate it.
 
-    python examples/make_fleet_data.py       # rewrites examples/data/fleet/ and the model
+    python examples/make_fleet_data.py            # rewrites examples/data/fleet/ and the model
+    python examples/make_fleet_data.py --out DIR  # writes DIR/fleet/ and DIR/fleet_start.toml
 """
 
 from __future__ import annotations
@@ -99,12 +100,19 @@ def _csv_gz(meas) -> bytes:
     return buf.getvalue()
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    import argparse
+
     import numpy as np
 
     from gearsim.analysis import synthetic as S
 
-    os.makedirs(FOLDER, exist_ok=True)
+    ap = argparse.ArgumentParser(description="write the bundled small fleet")
+    ap.add_argument("--out", default=None, help="write the logs and the model into this directory")
+    args = ap.parse_args(argv)
+    folder = FOLDER if args.out is None else os.path.join(args.out, "fleet")
+    start = START if args.out is None else os.path.join(args.out, "fleet_start.toml")
+    os.makedirs(folder, exist_ok=True)
     rng = np.random.default_rng(2026)
     exc = S.excitation(SAMPLES, DT, max_speed=30.0, max_load=3.0, seed=CYCLE_SEED, temperature=None)
     rows = []
@@ -117,17 +125,17 @@ def main() -> int:
         if i == BROKEN:
             data = data[: len(data) // 2]
         name = f"{unit}.csv.gz"
-        with open(os.path.join(FOLDER, name), "wb") as fh:
+        with open(os.path.join(folder, name), "wb") as fh:
             fh.write(data)
         total += len(data)
         stamp = (FIRST + i * PERIOD).isoformat().replace("+00:00", "Z")
         rows.append([unit, name, f"L{1 + i % 2}", f"S{1 + (i // 2) % 3}", stamp])
-    with open(os.path.join(FOLDER, "manifest.csv"), "w", newline="") as fh:
+    with open(os.path.join(folder, "manifest.csv"), "w", newline="") as fh:
         w = csv.writer(fh, lineterminator="\n")
         w.writerow(["unit", "path", "line", "station", "timestamp"])
         w.writerows(rows)
-    start_model().save(START)
-    print(f"wrote {UNITS} logs ({total / 1e6:.2f} MB) and manifest.csv in {FOLDER}, and {START}")
+    start_model().save(start)
+    print(f"wrote {UNITS} logs ({total / 1e6:.2f} MB) and manifest.csv in {folder}, and {start}")
     return 0
 
 
