@@ -118,6 +118,7 @@ def test_bad_fleet_inputs_exit_2(small, tmp_path, capsys):
         ([str(logs), "--add", "coulomb_friction", "--manifest", str(man)], "one of them"),
         ([str(logs), "--add", "coulomb_friction", "--input-filter", "fast"], "--input-filter"),
         ([str(logs), "--add", "coulomb_friction", "--threshold", "-1"], "--threshold"),
+        ([str(logs), "--add", "coulomb_friction", "--column", "base_speed"], "base_speed"),
     ]
     for argv, expect in cases:
         status, o, e = _cli(["fleet", *argv, "--model", str(model), "--out", str(out)], capsys)

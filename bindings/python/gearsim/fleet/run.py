@@ -441,6 +441,9 @@ def run_fleet(
     if not opts.diagnose:
         _check_effects(opts.effects, start)
     task_opts = opts.task_options()  # a bad --input-filter: exit 2 here
+    from ..analysis.measurement import parse_column_map
+
+    parse_column_map(task_opts["columns"])  # a bad --column: exit 2 here, not on every unit
     out = _check_out(out, [u.path for u in units] + [manifest, model_file])
     if scheduler:
         _check_scheduler(scheduler)
