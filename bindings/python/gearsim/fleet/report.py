@@ -151,23 +151,40 @@ def _fig_histograms(plt, samples, pop, metrics):
     return fig
 
 
+def _span(v: np.ndarray) -> tuple[float, float]:
+    """The range of v (finite values) with 15 % margin."""
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return -1.0, 1.0
+    lo, hi = float(v.min()), float(v.max())
+    pad = 0.15 * (hi - lo or abs(hi) or 1.0)
+    return lo - pad, hi + pad
+
+
 def _fig_scatter(plt, samples, pop):
+    """The population's cloud at its own scale; an outlier beyond it is drawn
+    at the edge and labelled "off scale"."""
     a, b = pop["most_variable"]
     x, y = _metric_values(samples, a), _metric_values(samples, b)
     out_units = {o["unit"] for o in pop["outliers"]}
     is_out = np.array([s.unit in out_units for s in samples])
     fig, ax = plt.subplots(figsize=(7.5, 5.5))
     ax.scatter(x[~is_out], y[~is_out], s=10, color="#1f77b4", label="units")
-    ax.scatter(x[is_out], y[is_out], s=28, color="#c00", marker="x", label="outliers")
+    (x0, x1), (y0, y1) = _span(x[~is_out]), _span(y[~is_out])
+    cx, cy = np.clip(x, x0, x1), np.clip(y, y0, y1)
+    ax.scatter(cx[is_out], cy[is_out], s=28, color="#c00", marker="x", label="outliers")
     for i in np.nonzero(is_out)[0][:20]:
+        off = " (off scale)" if (cx[i], cy[i]) != (x[i], y[i]) else ""
         ax.annotate(
-            samples[i].unit,
-            (x[i], y[i]),
+            samples[i].unit + off,
+            (cx[i], cy[i]),
             fontsize=7,
             color="#c00",
             xytext=(3, 3),
             textcoords="offset points",
         )
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
     ax.set_xlabel(_label(a, pop))
     ax.set_ylabel(_label(b, pop))
     ax.grid(alpha=0.3)
@@ -223,9 +240,7 @@ def _fig_drift(plt, samples, pop, metrics):
         far = (np.abs(zs) > pop["threshold"])[ok][order]
         ax.plot(d[~far], v[~far], ".", ms=3, color="#1f77b4")
         if (~far).sum() >= 2:  # the outliers are drawn at the edge, not scaled to
-            lo, hi = float(v[~far].min()), float(v[~far].max())
-            pad = 0.15 * (hi - lo or abs(hi) or 1.0)
-            lo, hi = lo - pad, hi + pad
+            lo, hi = _span(v[~far])
             ax.set_ylim(lo, hi)
             ax.plot(d[far], np.clip(v[far], lo, hi), "x", ms=6, color="#c00")
         win = max(5, len(d) // 20)
