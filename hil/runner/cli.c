@@ -2,9 +2,10 @@
  * gearsim-hil: the C HIL runner's command line (docs/hil-runner.md).
  *
  *   gearsim-hil --params rig.params [--period S] [--substeps N] [--timeout S]
- *       live:   [--transport candump|socketcan] [--rx PATH] [--tx PATH] [--channel IF]
- *               [--duration S] [--spin-us US] [--fifo PRIO] [--mlockall] [--cpu N] [--json]
- *       replay: --replay LOG.log [-o ANSWERS.log] [--tail S] [--max-gap S] [--json]
+ *       [--scenario S.toml [--junit VERDICT.xml]] [--log RECORDING.log]
+ *       live:   [--transport candump|socketcan|socketcand] [--rx PATH] [--tx PATH] [--channel IF]
+ *               [--listen HOST:PORT] [--duration S] [--spin-us US] [--fifo PRIO] [--mlockall] [--cpu N]
+ *       replay: --replay LOG.log [-o ANSWERS.log] [--tail S] [--max-gap S]
  *
  * Bad input: one line on stderr, exit status 2.
  */
@@ -21,9 +22,12 @@
 
 static const char usage[] =
     "usage: gearsim-hil --params FILE [--period S] [--substeps N] [--timeout S] [--json]\n"
-    "  live:   [--transport candump|socketcan] [--rx PATH|-] [--tx PATH|-] [--channel IF]\n"
-    "          [--duration S] [--spin-us US] [--max-lag S] [--fifo PRIO] [--mlockall] [--cpu N]\n"
+    "          [--scenario S.toml [--junit VERDICT.xml]] [--log RECORDING.log]\n"
+    "  live:   [--transport candump|socketcan|socketcand] [--rx PATH|-] [--tx PATH|-] [--channel IF]\n"
+    "          [--listen HOST:PORT] [--duration S] [--spin-us US] [--max-lag S] [--fifo PRIO] [--mlockall]\n"
+    "          [--cpu N]\n"
     "  replay: --replay LOG.log [-o ANSWERS.log] [--tail S] [--max-gap S]\n"
+    "  exit status: 0, 2 bad input, 3 a scenario expectation failed\n"
     "  --list-params: the keys of the parameter file; --check-dbc: check the built-in DBC\n"
     "  tables; --version: version and precision. docs/hil-runner.md has the details.\n";
 
@@ -76,6 +80,7 @@ static void set_defaults(runner_options *o)
     o->rx = "-";
     o->tx = "-";
     o->channel = "can0";
+    o->listen = "127.0.0.1:29536"; /* socketcand's port */
     o->spin_us = -1; /* automatic: live.c */
     o->cpu = -1;
 }
@@ -122,6 +127,7 @@ static void value_option(const char *a, const char *v, runner_options *o)
         o->timeout_s = number_option(a, v, 0.0, 0);
     } else if (strcmp(a, "--duration") == 0) {
         o->duration_s = number_option(a, v, 0.0, 1);
+        o->duration_given = 1;
     } else if (strcmp(a, "--tail") == 0) {
         o->tail_s = number_option(a, v, 0.0, 1);
     } else if (strcmp(a, "--max-gap") == 0) {
@@ -129,10 +135,18 @@ static void value_option(const char *a, const char *v, runner_options *o)
     } else if (strcmp(a, "--max-lag") == 0) {
         o->max_lag_s = number_option(a, v, 0.0, 0);
     } else if (strcmp(a, "--transport") == 0) {
-        if (strcmp(v, "candump") != 0 && strcmp(v, "socketcan") != 0) {
-            runner_die("--transport %s: expected candump or socketcan", v);
+        if (strcmp(v, "candump") != 0 && strcmp(v, "socketcan") != 0 && strcmp(v, "socketcand") != 0) {
+            runner_die("--transport %s: expected candump, socketcan or socketcand", v);
         }
         o->transport = v;
+    } else if (strcmp(a, "--listen") == 0) {
+        o->listen = v;
+    } else if (strcmp(a, "--scenario") == 0) {
+        o->scenario = v;
+    } else if (strcmp(a, "--junit") == 0) {
+        o->junit = v;
+    } else if (strcmp(a, "--log") == 0) {
+        o->log = v;
     } else if (strcmp(a, "--rx") == 0) {
         o->rx = v;
     } else if (strcmp(a, "--tx") == 0) {
