@@ -186,12 +186,12 @@ class _Table:
     as they are, each role resolved by gs_hil_role_parse. Owns the C memory
     (keep it alive as long as the table is used)."""
 
-    def __init__(self, db: Any, block: str | None, fail: Any) -> None:
+    def __init__(self, db: Any, block: str | None, fail: Any, name: str = "dbc") -> None:
         self._keep: list[Any] = []
         messages = db.messages
         self.frames = ffi.new("gs_hil_frame_spec[]", max(1, len(messages)))
         self.dbc = ffi.new("gs_hil_dbc *")
-        self.dbc.name = self._text("dbc")
+        self.dbc.name = self._text(name)  # the file's stem, as the runner's built-in tables
         self.dbc.block = BLOCKS.get(block or "", lib.GS_RIG_SIMPLE_GEAR)
         self.dbc.frames = self.frames
         self.dbc.frame_count = len(messages)
@@ -289,7 +289,7 @@ class RigDbc:
             if dbc_block and dbc_block != block:
                 self._fail(f"is for {dbc_block}, not for {block}")
         self.block: str | None = dbc_block or block
-        self.table = _Table(db, self.block, self._fail)
+        self.table = _Table(db, self.block, self._fail, self.path.stem)
         err = ffi.new("gs_hil_error *")
         if lib.gs_hil_dbc_check(self.table.dbc, err) != lib.GS_HIL_OK:
             self._fail(ffi.string(err.message).decode("utf-8", "replace"))
