@@ -218,11 +218,18 @@ double gs_hil_fault_value_(gs_hil_bridge *b, unsigned frame, unsigned signal, do
     return x;
 }
 
+/* periods distinct bits of the frame flipped: drawn from the seed, a bit
+ * drawn twice moves on to the next one not yet flipped. */
 static void flip_bits(gs_hil_fault *f, gs_hil_frame *frame)
 {
     unsigned bits = 8u * (frame->length < GS_HIL_MAX_DATA ? frame->length : GS_HIL_MAX_DATA);
-    for (unsigned k = 0; k < f->spec.periods && bits > 0u; ++k) {
+    uint64_t flipped = 0;
+    for (unsigned k = 0; k < f->spec.periods && k < bits; ++k) {
         unsigned bit = (unsigned)(next_random(&f->rng) % bits);
+        while ((flipped >> bit) & 1u) {
+            bit = (bit + 1u) % bits;
+        }
+        flipped |= (uint64_t)1 << bit;
         frame->data[bit / 8u] ^= (uint8_t)(1u << (bit % 8u));
     }
 }

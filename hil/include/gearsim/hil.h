@@ -166,7 +166,7 @@ extern "C" {
     X(CLAMP, "clamp")               /* x within [value, value2] */                                  \
     X(DROP, "drop")                 /* the frame is not sent */                                     \
     X(DUPLICATE, "duplicate")       /* the frame is sent twice */                                   \
-    X(CORRUPT, "corrupt")           /* periods bits of the frame flipped, seeded */                 \
+    X(CORRUPT, "corrupt")           /* periods distinct bits of the frame flipped, seeded */                 \
     X(COUNTER_STOP, "counter_stop") /* the status frame's rolling counter stops */
 
 /* Comparisons of a trigger condition. */
