@@ -4,7 +4,8 @@
  *   gearsim-hil --params rig.params [--period S] [--substeps N] [--timeout S]
  *       [--scenario S.toml [--junit VERDICT.xml]] [--log RECORDING.log]
  *       live:   [--transport candump|socketcan|socketcand] [--rx PATH] [--tx PATH] [--channel IF]
- *               [--listen HOST:PORT] [--duration S] [--spin-us US] [--fifo PRIO] [--mlockall] [--cpu N]
+ *               [--listen HOST:PORT] [--wait-client] [--duration S] [--spin-us US] [--fifo PRIO]
+ *               [--mlockall] [--cpu N]
  *       replay: --replay LOG.log [-o ANSWERS.log] [--tail S] [--max-gap S]
  *
  * Bad input: one line on stderr, exit status 2.
@@ -24,8 +25,8 @@ static const char usage[] =
     "usage: gearsim-hil --params FILE [--period S] [--substeps N] [--timeout S] [--json]\n"
     "          [--scenario S.toml [--junit VERDICT.xml]] [--log RECORDING.log]\n"
     "  live:   [--transport candump|socketcan|socketcand] [--rx PATH|-] [--tx PATH|-] [--channel IF]\n"
-    "          [--listen HOST:PORT] [--duration S] [--spin-us US] [--max-lag S] [--fifo PRIO] [--mlockall]\n"
-    "          [--cpu N]\n"
+    "          [--listen HOST:PORT] [--wait-client] [--duration S] [--spin-us US] [--max-lag S]\n"
+    "          [--fifo PRIO] [--mlockall] [--cpu N]\n"
     "  replay: --replay LOG.log [-o ANSWERS.log] [--tail S] [--max-gap S]\n"
     "  exit status: 0, 2 bad input, 3 a scenario expectation failed\n"
     "  --list-params: the keys of the parameter file; --check-dbc: check the built-in DBC\n"
@@ -112,6 +113,10 @@ static int flag_option(const char *a, runner_options *o)
         o->json = 1;
         return 1;
     }
+    if (strcmp(a, "--wait-client") == 0) {
+        o->wait_client = 1;
+        return 1;
+    }
     return 0;
 }
 
@@ -183,6 +188,9 @@ static void parse_args(int argc, char **argv, runner_options *o)
     }
     if (o->params_path == NULL) {
         runner_die("--params: required (the rig's parameter file; see --help)");
+    }
+    if (o->wait_client && strcmp(o->transport, "socketcand") != 0) {
+        runner_die("--wait-client: only with --transport socketcand");
     }
     if (o->out != NULL && o->replay == NULL) {
         runner_die("-o %s: only with --replay (live answers go to --tx)", o->out);

@@ -170,6 +170,22 @@ static void open_transport(runner *r)
     }
 }
 
+/* --wait-client: the run starts once a socketcand client is in raw mode
+ * (SIGINT or SIGTERM while waiting: 1, stop). */
+static int wait_for_client(runner *r)
+{
+    while (r->bus.sc_state != SC_RAW) {
+        if (stop_requested()) {
+            return 1;
+        }
+        /* a frame right behind the handshake is handled (the first period applies it) */
+        transport_poll(&r->bus, runner_seconds_of(CLOCK_REALTIME), live_handle, r);
+        struct timespec pause = {0, 5000000};
+        nanosleep(&pause, NULL);
+    }
+    return 0;
+}
+
 int runner_live(runner *r)
 {
     const runner_options *o = &r->options;
@@ -178,7 +194,6 @@ int runner_live(runner *r)
         runner_die("--tx %s: is an input of the command; choose another file", o->tx);
     }
     runner_init_rig(r, live_send, r, 1);
-    r->bridge.config.stamp_origin_s = runner_seconds_of(CLOCK_REALTIME); /* the recording's rig time */
     runner_campaign_start(r);
     open_transport(r);
     sigset_t stop;
@@ -197,9 +212,13 @@ int runner_live(runner *r)
     if (!o->duration_given && o->scenario != NULL) {
         end = gs_hil_scenario_end(&r->bridge); /* a scenario runs its duration */
     }
+    r->bridge.config.stamp_origin_s = runner_seconds_of(CLOCK_REALTIME); /* the recording's rig time */
     runner_campaign_open_log(r);
+    int stopped = o->wait_client && wait_for_client(r) != 0; /* before it started: no period runs */
     double start = runner_seconds_of(CLOCK_MONOTONIC), cpu0 = runner_cpu_seconds();
-    paced_loop(r, end);
+    if (!stopped) {
+        paced_loop(r, end);
+    }
     r->report.live = 1;
     r->report.wall_s = runner_seconds_of(CLOCK_MONOTONIC) - start;
     r->report.cpu_s = runner_cpu_seconds() - cpu0;

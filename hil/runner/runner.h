@@ -34,7 +34,7 @@ typedef struct {
     long substeps;
     const char *transport, *rx, *tx, *channel, *listen;
     long spin_us, fifo_priority, cpu;
-    int mlock, json, duration_given;
+    int mlock, json, duration_given, wait_client;
     const char *replay, *out;
     const char *scenario, *junit, *log;
 } runner_options;
