@@ -29,7 +29,8 @@ static const char usage[] =
     "          [--fifo PRIO] [--mlockall] [--cpu N]\n"
     "  replay: --replay LOG.log [-o ANSWERS.log] [--tail S] [--max-gap S]\n"
     "  exit status: 0, 2 bad input, 3 a scenario expectation failed\n"
-    "  --list-params: the keys of the parameter file; --check-dbc: check the built-in DBC\n"
+    "  --list-params: the keys of the parameter file; --list-tunable: the parameters a\n"
+    "  parameter frame may change, by index; --check-dbc: check the built-in DBC\n"
     "  tables; --version: version and precision. docs/hil-runner.md has the details.\n";
 
 static double number_option(const char *name, const char *text, double low, int low_inclusive)
@@ -69,6 +70,18 @@ static int check_builtin_dbcs(void)
     return 0;
 }
 
+/* The parameters a parameter frame or a scenario may change: rig, index, key. */
+static void list_tunable(void)
+{
+    static const gs_rig_block blocks[] = {GS_RIG_SIMPLE_GEAR, GS_RIG_RACK_PINION};
+    static const char *const names[] = {"simple_gear", "rack_pinion"};
+    for (size_t b = 0; b < 2; ++b) {
+        for (unsigned i = 0; i < gs_hil_param_count(blocks[b]); ++i) {
+            printf("%s %u %s\n", names[b], i, gs_hil_param_key(blocks[b], i));
+        }
+    }
+}
+
 static void set_defaults(runner_options *o)
 {
     memset(o, 0, sizeof *o);
@@ -104,6 +117,10 @@ static int flag_option(const char *a, runner_options *o)
     }
     if (strcmp(a, "--check-dbc") == 0) {
         exit(check_builtin_dbcs());
+    }
+    if (strcmp(a, "--list-tunable") == 0) {
+        list_tunable();
+        exit(0);
     }
     if (strcmp(a, "--mlockall") == 0) {
         o->mlock = 1;

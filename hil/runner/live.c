@@ -170,15 +170,17 @@ static void open_transport(runner *r)
     }
 }
 
-/* --wait-client: the run starts once a socketcand client is in raw mode
- * (SIGINT or SIGTERM while waiting: 1, stop). */
+/* --wait-client: the run starts when the first frame of a socketcand client
+ * arrives (SIGINT or SIGTERM while waiting: 1, stop). That frame is handled
+ * before period 0, so the recording starts at the run's start and replays to
+ * it. */
 static int wait_for_client(runner *r)
 {
-    while (r->bus.sc_state != SC_RAW) {
+    while (r->report.frames_in == 0u) {
         if (stop_requested()) {
             return 1;
         }
-        /* a frame right behind the handshake is handled (the first period applies it) */
+        /* the handshake, then the first frames: handled, the first period applies them */
         transport_poll(&r->bus, runner_seconds_of(CLOCK_REALTIME), live_handle, r);
         struct timespec pause = {0, 5000000};
         nanosleep(&pause, NULL);

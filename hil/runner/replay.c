@@ -112,6 +112,11 @@ static void drive(runner *r, FILE *log, replay_sink *sink, const char *tmp)
             origin = frame.timestamp_s;
             b->config.stamp_origin_s = origin; /* answers in the log's time base */
         }
+        uint64_t end = gs_hil_scenario_end(b);
+        if (end > 0u && gs_hil_period_at(b, frame.timestamp_s - origin) > end) {
+            r->report.frames_in--;
+            break; /* after the scenario's end: the run it describes is over */
+        }
         gs_hil_advance_to(b, frame.timestamp_s - origin);
         runner_record_received(r, &frame);
         gs_hil_handle(b, &frame);
@@ -143,10 +148,11 @@ int runner_replay(runner *r)
     double start = runner_seconds_of(CLOCK_MONOTONIC), cpu0 = runner_cpu_seconds();
     drive(r, log, &sink, tmp);
     fclose(log);
-    gs_hil_advance(b, 1u + gs_hil_periods_in(b, o->tail_s)); /* the last command acts, then the tail */
-    uint64_t end = gs_hil_scenario_end(b); /* a scenario runs its whole duration */
-    if (end > b->counters.count[GS_HIL_COUNT_PERIODS]) {
-        gs_hil_advance(b, end - b->counters.count[GS_HIL_COUNT_PERIODS]);
+    uint64_t end = gs_hil_scenario_end(b);
+    if (end == 0u) {
+        gs_hil_advance(b, 1u + gs_hil_periods_in(b, o->tail_s)); /* the last command acts, then the tail */
+    } else if (end > b->counters.count[GS_HIL_COUNT_PERIODS]) {
+        gs_hil_advance(b, end - b->counters.count[GS_HIL_COUNT_PERIODS]); /* a scenario: its duration, as live */
     }
     gs_hil_close(b);
     r->report.wall_s = runner_seconds_of(CLOCK_MONOTONIC) - start;

@@ -480,6 +480,11 @@ class Bridge:
         if target > self.periods:
             self.advance(target - self.periods)
 
+    def period_at(self, t: float) -> int:
+        """The period boundary at which a replay handles a frame t seconds
+        after the log's first (gs_hil_period_at)."""
+        return int(lib.gs_hil_period_at(self._b, t))
+
     def periods_in(self, seconds: float) -> int:
         """Whole frame periods in ``seconds`` (rounded half to even)."""
         return int(lib.gs_hil_periods_in(self._b, seconds))

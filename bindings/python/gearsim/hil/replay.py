@@ -375,18 +375,22 @@ def replay_messages(
     _check_tail(tail)
     check = TimeCheck(max_gap, name)
     n = 0
+    end = bridge.scenario_end
     for msg in messages:
         ts = check(msg.timestamp)
         if origin is None:
             origin = ts
+        if end and bridge.period_at(ts - origin) > end:
+            break  # after the scenario's end: the run it describes is over
         bridge.advance_to(ts - origin)
         if on_input is not None:
             on_input(msg)
         bridge.handle(msg)
         n += 1
-    bridge.advance(1 + bridge.periods_in(tail))
-    if bridge.scenario_end > bridge.periods:  # a scenario runs its whole duration
-        bridge.advance(bridge.scenario_end - bridge.periods)
+    if not end:
+        bridge.advance(1 + bridge.periods_in(tail))  # the last command acts, then the tail
+    elif end > bridge.periods:
+        bridge.advance(end - bridge.periods)  # a scenario: its duration, as a live run
     return n
 
 
