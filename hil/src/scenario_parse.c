@@ -366,7 +366,7 @@ static gs_hil_status scenario_table(parser *p)
         return fail(p, line_of(p, "seed"), "seed", "a whole number >= 0");
     }
     s->seed = (uint64_t)seed;
-    snprintf(s->name, sizeof s->name, "%s", name != NULL ? name : "scenario");
+    snprintf(s->name, sizeof s->name, "%.127s", name != NULL ? name : "scenario");
     p->have_duration = 1;
     return GS_HIL_OK;
 }
@@ -719,15 +719,15 @@ static gs_hil_status expect_range(parser *p, gs_hil_expect_def *e, const char *t
                             eq->text);
             }
             v = (double)mode;
-            snprintf(e->what, sizeof e->what, "%s == %s", target, gs_hil_mode_name((gs_hil_mode)mode));
+            snprintf(e->what, sizeof e->what, "%.60s == %s", target, gs_hil_mode_name((gs_hil_mode)mode));
         } else if (eq->type == VALUE_BOOL) {
             v = eq->boolean ? 1.0 : 0.0;
-            snprintf(e->what, sizeof e->what, "%s == %s", target, eq->boolean ? "true" : "false");
+            snprintf(e->what, sizeof e->what, "%.60s == %s", target, eq->boolean ? "true" : "false");
         } else {
             if (!has_tol && sig != NULL && sig->role != GS_HIL_ROLE_CMD_MODE) {
                 tol = 0.5 * fabs(sig->scale); /* half a step of the signal's raw value */
             }
-            snprintf(e->what, sizeof e->what, "%s == %g (+- %g)", target, v, tol);
+            snprintf(e->what, sizeof e->what, "%.60s == %g (+- %g)", target, v, tol);
         }
         e->minimum = v - tol;
         e->maximum = v + tol;
@@ -745,7 +745,7 @@ static gs_hil_status expect_range(parser *p, gs_hil_expect_def *e, const char *t
     if (!(e->minimum <= e->maximum)) {
         return fail(p, line_of(p, "max"), "max", "max >= min");
     }
-    snprintf(e->what, sizeof e->what, "%s in [%g, %g]", target, e->minimum, e->maximum);
+    snprintf(e->what, sizeof e->what, "%.60s in [%g, %g]", target, e->minimum, e->maximum);
     return GS_HIL_OK;
 }
 
@@ -787,7 +787,7 @@ static gs_hil_status expect_step(parser *p, gs_hil_step *st)
         snprintf(when, sizeof when, "at %g s", st->at_s);
     }
     if (st->name[0] != '\0') {
-        snprintf(e->name, sizeof e->name, "%s", st->name);
+        snprintf(e->name, sizeof e->name, "%.127s", st->name);
     } else {
         char what[GS_HIL_TEXT_MAX];
         memcpy(what, e->what, sizeof what);
@@ -862,7 +862,7 @@ static gs_hil_status step_table(parser *p)
     if (!(st->at_s >= 0.0)) {
         return fail(p, line_of(p, "at"), "at", "a time >= 0 s");
     }
-    snprintf(st->name, sizeof st->name, "%s", name != NULL ? name : "");
+    snprintf(st->name, sizeof st->name, "%.127s", name != NULL ? name : "");
     gs_hil_status r = action == 0   ? load_step(p, st)
                       : action == 1 ? param_step(p, st)
                       : action == 2 ? fault_step(p, st)

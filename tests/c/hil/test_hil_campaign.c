@@ -123,7 +123,7 @@ static double base_speed_sent(uint64_t p)
             return gs_hil_signal_value(signal_of("GearFbBase", 1), out.data[i]);
         }
     }
-    return NAN;
+    return nan("");
 }
 
 static unsigned frames_of(uint32_t id, uint64_t p)
@@ -439,6 +439,7 @@ static void test_parameter_change_takes_effect_one_period_later(void **unused)
     /* the same run by hand: the old rig to period 21, then a rig of the new parameters */
     gs_rig_consts a, b2;
     gs_rig_state s, scratch;
+    memset(&s, 0, sizeof s); /* padding as in the bridge's (static) state: compared as bytes below */
     gs_error err;
     gs_rig_params changed = gs_rig_params_default();
     changed.dt_s = GS_R(1e-3);
