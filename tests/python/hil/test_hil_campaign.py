@@ -582,3 +582,64 @@ def _model(tmp_path: Path) -> Path:
     path = tmp_path / "model.toml"
     gear_model().save(path)
     return path
+
+
+@needs_runner
+def test_runner_parameter_frames_recorded_and_replayed(tmp_path: Path) -> None:
+    """Parameter frames through the runner: a good one takes effect (and is
+    acknowledged a period later), a bad one is a counted refusal; the
+    runner's recording holds the request and the acknowledgement around the
+    change, and a replay of the recording gives the same answers."""
+    dbc = RigDbc(block="gear")
+    msgs = [m for k in range(0, 300, 10) for m in command(dbc, 1.7e9 + k * 1e-3, base_speed=10.0)]
+    good = dbc.encode_param("load_coulomb_friction", 0.25)
+    bad = dbc.encode_param("load_coulomb_friction", -1.0)
+    good.timestamp, bad.timestamp = 1.7e9 + 0.1005, 1.7e9 + 0.2005
+    log = write_log(tmp_path / "in.log", sorted([*msgs, good, bad], key=lambda m: m.timestamp))
+    params = runner_mod.write_params(gear_model(), tmp_path / "gear.params")
+    rec, out = tmp_path / "rec.log", tmp_path / "out.log"
+    res = run([*runner_mod.replay_command(params, log, out, runner=RUNNER), "--log", str(rec)])
+    assert res.returncode == 0, res.stderr
+    s = summary(res.stderr)
+    assert s["param_changes"] == 1 and s["param_refused"] == 1
+    assert s["reasons"]["rejected.bad_param"] == 1
+    lines = rec.read_text().splitlines()
+    request = next(i for i, line in enumerate(lines) if " 120#" in line and line.endswith(" R"))
+    acks = [line for line in lines if " 220#" in line]
+    assert len(acks) == 2 and all(line.endswith(" T") for line in acks)
+    # the request at the start of period 101, its acknowledgement at the end of period 102
+    t_req = float(lines[request].split(")")[0][1:]) - 1.7e9
+    t_ack = float(acks[0].split(")")[0][1:]) - 1.7e9
+    assert t_req == pytest.approx(0.101, abs=2e-6) and t_ack == pytest.approx(0.103, abs=2e-6)
+    ack = roles_by_cantools(dbc.ack_frame, bytes.fromhex(acks[0].split("#")[1].split()[0]))
+    assert ack["ack.result"] == 0.0 and ack["ack.value"] == pytest.approx(0.25)
+    again = tmp_path / "again.log"
+    res2 = run(runner_mod.replay_command(params, rec, again, runner=RUNNER))
+    assert res2.returncode == 0, res2.stderr
+    # the replay of the recording: the same answers, but for RxIgnored (GearCounters), which
+    # counts the recorded answers the replay reads back
+    first = [(m.arbitration_id, bytes(m.data)) for m in read_log(out) if m.arbitration_id != 0x211]
+    second = [(m.arbitration_id, bytes(m.data)) for m in read_log(again) if m.arbitration_id != 0x211]
+    assert second == first
+
+
+def test_python_run_with_a_scenario_writes_its_verdict(tmp_path: Path) -> None:
+    """gearsim hil run --scenario: paced, as long as the scenario, the verdict
+    to --junit; exit 3 when an expectation fails."""
+    scenario = write_scenario(
+        tmp_path / "s.toml",
+        'at = 0.05\nexpect = "cmd_timeout"\nequals = true\nname = "no host: timed out"',
+        'at = 0.1\nexpect = "DriveMode"\nequals = "speed"\nname = "no host: no command"',
+        duration=0.2,
+    )
+    xml = tmp_path / "v.xml"
+    res = subprocess.run(
+        [*_python(), "run", "--model", str(_model(tmp_path)), "-i", "virtual", "-c",
+         next_channel("run"), "--scenario", str(scenario), "--junit", str(xml), "--json"],
+        capture_output=True, text=True, timeout=60,
+    )
+    assert res.returncode == 3, res.stderr
+    out = json.loads(res.stdout)
+    assert out["periods"] == 200 and out["verdict"] == {"passed": 1, "failed": 1}
+    root = _validate(xml.read_text())
+    assert root.get("tests") == "2" and root.get("failures") == "1"
