@@ -77,7 +77,9 @@ class Counters:
     commands had arrived), ``recoveries`` (out of it), ``overruns`` (paced
     run: periods that started more than one period late), ``resyncs`` (paced
     run: the schedule was moved because the loop fell too far behind),
-    ``saturations``, ``periods``; and ``steps``. ``reasons`` breaks
+    ``saturations``, ``periods``, ``faults`` (values and frames an injected
+    fault changed), ``param_changes``, ``param_refused``, ``log_dropped``
+    (the C runner's recording); and ``steps``. ``reasons`` breaks
     rx_rejected, rx_late and rx_ignored down ("rejected.unknown_id": 3, ...);
     ``saturated`` counts clamped values per feedback signal."""
 
