@@ -336,8 +336,9 @@ def test_table_matches_pyproject():
     # all: every extra but the test tooling, with the same pins
     union = {r for name, reqs in extras.items() if name not in ("all", "test") for r in reqs}
     assert set(extras["all"]) == union
-    # the test tooling: pytest, hypothesis, and build for the sdist of scripts/package_check.sh
-    assert {_distribution(r) for r in extras["test"]} == {"pytest", "hypothesis", "build"}
+    # the test tooling: pytest, hypothesis, build for the sdist of scripts/package_check.sh,
+    # xmlschema for the JUnit verdicts of the HIL scenarios (tests/python/hil/junit.xsd)
+    assert {_distribution(r) for r in extras["test"]} == {"pytest", "hypothesis", "build", "xmlschema"}
     assert set(extras["bench"]) <= set(extras["analysis"])
 
 
