@@ -10,6 +10,12 @@
  * their DBC range and flagged, never wrapped; the status frames carry a
  * rolling counter, flags and frame counters.
  *
+ * A test campaign lives here too (docs/hil.md): faults injected between the
+ * model's values and the encoder (gs_hil_add_fault), rig parameters changed
+ * at run time (parameter frames, gs_hil_request_param, gs_hil_prepare), and
+ * scenario files (gs_hil_scenario_parse, gs_hil_attach_scenario) whose
+ * expectations give a JUnit verdict (gs_hil_junit).
+ *
  * No I/O, no heap, no clock: frames come in through gs_hil_handle and go out
  * through a callback; simulated time advances by step count (gs_hil_advance).
  *
