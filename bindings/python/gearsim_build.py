@@ -196,13 +196,18 @@ def hil_library(absolute: bool = False) -> tuple[str, dict]:
     sources = sorted(HIL_SRC_DIR.glob("*.c"))
     if not sources:
         raise RuntimeError(f"gearsim: no C sources found in {HIL_SRC_DIR}")
-    deps = [HIL_HEADER, *sorted((INCLUDE_DIR / "gearsim").glob("*.h")), WARNINGS_FILE]
+    deps = [HIL_HEADER, *sorted(HIL_SRC_DIR.glob("*.h")), *sorted((INCLUDE_DIR / "gearsim").glob("*.h"))]
+    deps.append(WARNINGS_FILE)
     deps += [Path(__file__).resolve(), ROOT / "setup.py"]
     return (
         HIL_LIBRARY,
         {
             "sources": [_path(p, absolute) for p in sources],
-            "include_dirs": [_path(HIL_INCLUDE_DIR, absolute), _path(INCLUDE_DIR, absolute)],
+            "include_dirs": [
+                _path(HIL_INCLUDE_DIR, absolute),
+                _path(INCLUDE_DIR, absolute),
+                _path(HIL_SRC_DIR, absolute),
+            ],
             "cflags": core_cflags(),
             "obj_deps": {"": [_path(p, absolute) for p in deps if p.exists()]},
         },

@@ -166,8 +166,8 @@ static size_t put_hex(char *out, uint32_t value, unsigned digits)
     return digits;
 }
 
-size_t candump_format_line(const gs_hil_frame *frame, double stamp_s, const char *channel, char *out,
-                           size_t size)
+size_t candump_format_line_dir(const gs_hil_frame *frame, double stamp_s, const char *channel, char direction,
+                               char *out, size_t size)
 {
     size_t channel_len = strlen(channel);
     if (size < 64u + channel_len || !(stamp_s >= 0.0 && stamp_s < 1e12)) {
@@ -184,12 +184,29 @@ size_t candump_format_line(const gs_hil_frame *frame, double stamp_s, const char
     memcpy(out + n, channel, channel_len);
     n += channel_len;
     out[n++] = ' ';
-    n += put_hex(out + n, frame->id, frame->is_extended ? 8u : 3u);
-    out[n++] = '#';
-    unsigned length = frame->length < GS_HIL_MAX_DATA ? frame->length : GS_HIL_MAX_DATA;
-    for (unsigned i = 0; i < length; ++i) {
-        n += put_hex(out + n, frame->data[i], 2u);
+    if (frame->is_error) {
+        n += put_hex(out + n, CANDUMP_ERR_FLAG | CANDUMP_ERR_BUSERROR, 8u);
+        out[n++] = '#';
+    } else {
+        n += put_hex(out + n, frame->id, frame->is_extended ? 8u : 3u);
+        out[n++] = '#';
+        if (frame->is_remote) {
+            out[n++] = 'R';
+        } else {
+            unsigned length = frame->length < GS_HIL_MAX_DATA ? frame->length : GS_HIL_MAX_DATA;
+            for (unsigned i = 0; i < length; ++i) {
+                n += put_hex(out + n, frame->data[i], 2u);
+            }
+        }
     }
-    memcpy(out + n, " T\n", 3u);
-    return n + 3u;
+    out[n++] = ' ';
+    out[n++] = direction;
+    out[n++] = '\n';
+    return n;
+}
+
+size_t candump_format_line(const gs_hil_frame *frame, double stamp_s, const char *channel, char *out,
+                           size_t size)
+{
+    return candump_format_line_dir(frame, stamp_s, channel, 'T', out, size);
 }

@@ -27,4 +27,10 @@ int candump_parse_line(const char *line, size_t length, gs_hil_frame *frame);
 size_t candump_format_line(const gs_hil_frame *frame, double stamp_s, const char *channel, char *out,
                            size_t size);
 
+/* The same with the direction field given: 'T' sent, 'R' received. Error
+ * frames are written with CAN_ERR_FLAG|CAN_ERR_BUSERROR as their ID and
+ * remote frames as ID#R, as candump_parse_line reads them. */
+size_t candump_format_line_dir(const gs_hil_frame *frame, double stamp_s, const char *channel, char direction,
+                               char *out, size_t size);
+
 #endif

@@ -2,9 +2,11 @@
  * gearsim-hil: the C HIL runner's command line (docs/hil-runner.md).
  *
  *   gearsim-hil --params rig.params [--period S] [--substeps N] [--timeout S]
- *       live:   [--transport candump|socketcan] [--rx PATH] [--tx PATH] [--channel IF]
- *               [--duration S] [--spin-us US] [--fifo PRIO] [--mlockall] [--cpu N] [--json]
- *       replay: --replay LOG.log [-o ANSWERS.log] [--tail S] [--max-gap S] [--json]
+ *       [--scenario S.toml [--junit VERDICT.xml]] [--log RECORDING.log]
+ *       live:   [--transport candump|socketcan|socketcand] [--rx PATH] [--tx PATH] [--channel IF]
+ *               [--listen HOST:PORT] [--wait-client] [--duration S] [--spin-us US] [--fifo PRIO]
+ *               [--mlockall] [--cpu N]
+ *       replay: --replay LOG.log [-o ANSWERS.log] [--tail S] [--max-gap S]
  *
  * Bad input: one line on stderr, exit status 2.
  */
@@ -21,10 +23,14 @@
 
 static const char usage[] =
     "usage: gearsim-hil --params FILE [--period S] [--substeps N] [--timeout S] [--json]\n"
-    "  live:   [--transport candump|socketcan] [--rx PATH|-] [--tx PATH|-] [--channel IF]\n"
-    "          [--duration S] [--spin-us US] [--max-lag S] [--fifo PRIO] [--mlockall] [--cpu N]\n"
+    "          [--scenario S.toml [--junit VERDICT.xml]] [--log RECORDING.log]\n"
+    "  live:   [--transport candump|socketcan|socketcand] [--rx PATH|-] [--tx PATH|-] [--channel IF]\n"
+    "          [--listen HOST:PORT] [--wait-client] [--duration S] [--spin-us US] [--max-lag S]\n"
+    "          [--fifo PRIO] [--mlockall] [--cpu N]\n"
     "  replay: --replay LOG.log [-o ANSWERS.log] [--tail S] [--max-gap S]\n"
-    "  --list-params: the keys of the parameter file; --check-dbc: check the built-in DBC\n"
+    "  exit status: 0, 2 bad input, 3 a scenario expectation failed\n"
+    "  --list-params: the keys of the parameter file; --list-tunable: the parameters a\n"
+    "  parameter frame may change, by index; --check-dbc: check the built-in DBC\n"
     "  tables; --version: version and precision. docs/hil-runner.md has the details.\n";
 
 static double number_option(const char *name, const char *text, double low, int low_inclusive)
@@ -64,6 +70,18 @@ static int check_builtin_dbcs(void)
     return 0;
 }
 
+/* The parameters a parameter frame or a scenario may change: rig, index, key. */
+static void list_tunable(void)
+{
+    static const gs_rig_block blocks[] = {GS_RIG_SIMPLE_GEAR, GS_RIG_RACK_PINION};
+    static const char *const names[] = {"simple_gear", "rack_pinion"};
+    for (size_t b = 0; b < 2; ++b) {
+        for (unsigned i = 0; i < gs_hil_param_count(blocks[b]); ++i) {
+            printf("%s %u %s\n", names[b], i, gs_hil_param_key(blocks[b], i));
+        }
+    }
+}
+
 static void set_defaults(runner_options *o)
 {
     memset(o, 0, sizeof *o);
@@ -76,6 +94,7 @@ static void set_defaults(runner_options *o)
     o->rx = "-";
     o->tx = "-";
     o->channel = "can0";
+    o->listen = "127.0.0.1:29536"; /* socketcand's port */
     o->spin_us = -1; /* automatic: live.c */
     o->cpu = -1;
 }
@@ -99,12 +118,20 @@ static int flag_option(const char *a, runner_options *o)
     if (strcmp(a, "--check-dbc") == 0) {
         exit(check_builtin_dbcs());
     }
+    if (strcmp(a, "--list-tunable") == 0) {
+        list_tunable();
+        exit(0);
+    }
     if (strcmp(a, "--mlockall") == 0) {
         o->mlock = 1;
         return 1;
     }
     if (strcmp(a, "--json") == 0) {
         o->json = 1;
+        return 1;
+    }
+    if (strcmp(a, "--wait-client") == 0) {
+        o->wait_client = 1;
         return 1;
     }
     return 0;
@@ -122,6 +149,7 @@ static void value_option(const char *a, const char *v, runner_options *o)
         o->timeout_s = number_option(a, v, 0.0, 0);
     } else if (strcmp(a, "--duration") == 0) {
         o->duration_s = number_option(a, v, 0.0, 1);
+        o->duration_given = 1;
     } else if (strcmp(a, "--tail") == 0) {
         o->tail_s = number_option(a, v, 0.0, 1);
     } else if (strcmp(a, "--max-gap") == 0) {
@@ -129,10 +157,18 @@ static void value_option(const char *a, const char *v, runner_options *o)
     } else if (strcmp(a, "--max-lag") == 0) {
         o->max_lag_s = number_option(a, v, 0.0, 0);
     } else if (strcmp(a, "--transport") == 0) {
-        if (strcmp(v, "candump") != 0 && strcmp(v, "socketcan") != 0) {
-            runner_die("--transport %s: expected candump or socketcan", v);
+        if (strcmp(v, "candump") != 0 && strcmp(v, "socketcan") != 0 && strcmp(v, "socketcand") != 0) {
+            runner_die("--transport %s: expected candump, socketcan or socketcand", v);
         }
         o->transport = v;
+    } else if (strcmp(a, "--listen") == 0) {
+        o->listen = v;
+    } else if (strcmp(a, "--scenario") == 0) {
+        o->scenario = v;
+    } else if (strcmp(a, "--junit") == 0) {
+        o->junit = v;
+    } else if (strcmp(a, "--log") == 0) {
+        o->log = v;
     } else if (strcmp(a, "--rx") == 0) {
         o->rx = v;
     } else if (strcmp(a, "--tx") == 0) {
@@ -169,6 +205,9 @@ static void parse_args(int argc, char **argv, runner_options *o)
     }
     if (o->params_path == NULL) {
         runner_die("--params: required (the rig's parameter file; see --help)");
+    }
+    if (o->wait_client && strcmp(o->transport, "socketcand") != 0) {
+        runner_die("--wait-client: only with --transport socketcand");
     }
     if (o->out != NULL && o->replay == NULL) {
         runner_die("-o %s: only with --replay (live answers go to --tx)", o->out);

@@ -23,6 +23,7 @@ static void live_handle(void *context, const gs_hil_frame *frame)
 {
     runner *r = context;
     r->report.frames_in++;
+    runner_record_received(r, frame);
     gs_hil_handle(&r->bridge, frame);
 }
 
@@ -32,6 +33,7 @@ static int live_send(void *context, const gs_hil_frame *frame)
     if (transport_send(&r->bus, frame, r->wall_now_s) != 0) {
         return -1;
     }
+    runner_record_sent(r, frame);
     r->report.frames_out++;
     return 0;
 }
@@ -143,6 +145,7 @@ static void paced_loop(runner *r, uint64_t end_period)
         transport_poll(&r->bus, r->wall_now_s, live_handle, r);
         gs_hil_advance(b, 1);
         transport_flush(&r->bus);
+        gs_hil_prepare(b); /* parameter requests: derived after the answers are out, swapped next period */
         loop_histogram_add(&r->stats.work, now_ns() - start);
         deadline += period_ns;
     }
@@ -154,10 +157,35 @@ static void open_transport(runner *r)
     char message[512];
     int opened = strcmp(o->transport, "socketcan") == 0
                      ? transport_open_socketcan(&r->bus, o->channel, message, sizeof message)
+                 : strcmp(o->transport, "socketcand") == 0
+                     ? transport_open_socketcand(&r->bus, o->listen, o->channel, message, sizeof message)
                      : transport_open_candump(&r->bus, o->rx, o->tx, message, sizeof message);
     if (opened != 0) {
         runner_die("%s", message);
     }
+    if (r->bus.kind == TRANSPORT_SOCKETCAND) {
+        /* the address a client connects to (a port of 0 chose a free one) */
+        fprintf(stderr, "gearsim-hil: socketcand on %s, bus %s\n", r->bus.listen_on, o->channel);
+        fflush(stderr);
+    }
+}
+
+/* --wait-client: the run starts when the first frame of a socketcand client
+ * arrives (SIGINT or SIGTERM while waiting: 1, stop). That frame is handled
+ * before period 0, so the recording starts at the run's start and replays to
+ * it. */
+static int wait_for_client(runner *r)
+{
+    while (r->report.frames_in == 0u) {
+        if (stop_requested()) {
+            return 1;
+        }
+        /* the handshake, then the first frames: handled, the first period applies them */
+        transport_poll(&r->bus, runner_seconds_of(CLOCK_REALTIME), live_handle, r);
+        struct timespec pause = {0, 5000000};
+        nanosleep(&pause, NULL);
+    }
+    return 0;
 }
 
 int runner_live(runner *r)
@@ -167,7 +195,8 @@ int runner_live(runner *r)
                                     (strcmp(o->rx, "-") != 0 && runner_same_regular_file(o->tx, o->rx)))) {
         runner_die("--tx %s: is an input of the command; choose another file", o->tx);
     }
-    runner_init_rig(r, live_send, r);
+    runner_init_rig(r, live_send, r, 1);
+    runner_campaign_start(r);
     open_transport(r);
     sigset_t stop;
     sigemptyset(&stop);
@@ -182,8 +211,16 @@ int runner_live(runner *r)
     if (o->duration_s > 0.0 && end == 0u) {
         end = 1u;
     }
+    if (!o->duration_given && o->scenario != NULL) {
+        end = gs_hil_scenario_end(&r->bridge); /* a scenario runs its duration */
+    }
+    r->bridge.config.stamp_origin_s = runner_seconds_of(CLOCK_REALTIME); /* the recording's rig time */
+    runner_campaign_open_log(r);
+    int stopped = o->wait_client && wait_for_client(r) != 0; /* before it started: no period runs */
     double start = runner_seconds_of(CLOCK_MONOTONIC), cpu0 = runner_cpu_seconds();
-    paced_loop(r, end);
+    if (!stopped) {
+        paced_loop(r, end);
+    }
     r->report.live = 1;
     r->report.wall_s = runner_seconds_of(CLOCK_MONOTONIC) - start;
     r->report.cpu_s = runner_cpu_seconds() - cpu0;
@@ -191,7 +228,10 @@ int runner_live(runner *r)
     transport_drain(&r->bus, 1000);
     r->report.malformed_lines = r->bus.malformed_lines;
     r->report.write_errors = r->bus.write_errors;
+    r->report.client_connects = r->bus.connects;
+    r->report.client_disconnects = r->bus.disconnects;
     transport_close(&r->bus);
+    int status = runner_campaign_finish(r);
     runner_print_summary(r);
-    return 0;
+    return status;
 }

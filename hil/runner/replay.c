@@ -21,11 +21,13 @@ typedef struct {
     FILE *out;
     uint64_t frames_out;
     int failed;
+    runner *r;
 } replay_sink;
 
 static int replay_send(void *context, const gs_hil_frame *frame)
 {
     replay_sink *sink = context;
+    runner_record_sent(sink->r, frame);
     char line[128];
     size_t n = candump_format_line(frame, frame->timestamp_s, "vcan0", line, sizeof line);
     sink->frames_out++;
@@ -72,6 +74,7 @@ static FILE *open_answers(const runner_options *o, char *tmp, size_t tmp_size)
 /* Stop on bad input: the temporary answers go, one line, exit 2. */
 static void abandon(replay_sink *sink, const char *tmp)
 {
+    runner_campaign_abandon(sink->r);
     if (sink->out != NULL) {
         fclose(sink->out);
         unlink(tmp);
@@ -109,7 +112,13 @@ static void drive(runner *r, FILE *log, replay_sink *sink, const char *tmp)
             origin = frame.timestamp_s;
             b->config.stamp_origin_s = origin; /* answers in the log's time base */
         }
+        uint64_t end = gs_hil_scenario_end(b);
+        if (end > 0u && gs_hil_period_at(b, frame.timestamp_s - origin) > end) {
+            r->report.frames_in--;
+            break; /* after the scenario's end: the run it describes is over */
+        }
         gs_hil_advance_to(b, frame.timestamp_s - origin);
+        runner_record_received(r, &frame);
         gs_hil_handle(b, &frame);
     }
 }
@@ -122,24 +131,40 @@ int runner_replay(runner *r)
                    o->replay);
     }
     char tmp[PATH_MAX + 64];
-    replay_sink sink = {NULL, 0, 0};
+    replay_sink sink = {NULL, 0, 0, r};
     /* the parameters first (the bridge's errors name them), then the log and the output */
-    runner_init_rig(r, replay_send, &sink);
+    runner_init_rig(r, replay_send, &sink, 0);
     FILE *log = fopen(o->replay, "r");
     if (log == NULL) {
         runner_die("--replay %s: %s", o->replay, strerror(errno));
     }
+    if (o->log != NULL && runner_same_file(o->log, o->replay)) {
+        runner_die("--log %s: is an input of the command; choose another file", o->log);
+    }
+    runner_campaign_start(r);
     sink.out = open_answers(o, tmp, sizeof tmp);
+    runner_campaign_open_log(r);
     gs_hil_bridge *b = &r->bridge;
     double start = runner_seconds_of(CLOCK_MONOTONIC), cpu0 = runner_cpu_seconds();
     drive(r, log, &sink, tmp);
     fclose(log);
-    gs_hil_advance(b, 1u + gs_hil_periods_in(b, o->tail_s)); /* the last command acts, then the tail */
+    uint64_t end = gs_hil_scenario_end(b);
+    if (end == 0u) {
+        gs_hil_advance(b, 1u + gs_hil_periods_in(b, o->tail_s)); /* the last command acts, then the tail */
+    } else if (end > b->counters.count[GS_HIL_COUNT_PERIODS]) {
+        gs_hil_advance(b, end - b->counters.count[GS_HIL_COUNT_PERIODS]); /* a scenario: its duration, as live */
+    }
     gs_hil_close(b);
     r->report.wall_s = runner_seconds_of(CLOCK_MONOTONIC) - start;
     r->report.cpu_s = runner_cpu_seconds() - cpu0;
     r->report.frames_out = sink.frames_out;
     int used = b->counters.count[GS_HIL_COUNT_RX_USED] != 0u;
+    int status = 0;
+    if (used) {
+        status = runner_campaign_finish(r);
+    } else {
+        runner_campaign_abandon(r);
+    }
     if (sink.out != NULL) {
         int bad = sink.failed || fclose(sink.out) != 0;
         if (bad || !used || rename(tmp, o->out) != 0) {
@@ -155,5 +180,5 @@ int runner_replay(runner *r)
                    "the wrong --params?)",
                    o->replay, (unsigned long long)r->report.frames_in);
     }
-    return 0;
+    return status;
 }

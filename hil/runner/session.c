@@ -27,7 +27,7 @@ void runner_die(const char *fmt, ...)
     exit(RUNNER_EXIT_BAD_INPUT);
 }
 
-void runner_init_rig(runner *r, gs_hil_send_fn send, void *context)
+void runner_init_rig(runner *r, gs_hil_send_fn send, void *context, int live)
 {
     const runner_options *o = &r->options;
     char message[512];
@@ -57,6 +57,11 @@ void runner_init_rig(runner *r, gs_hil_send_fn send, void *context)
     config.ambient_temperature_K = p->ambient_temperature_K;
     config.send = send;
     config.send_context = context;
+    /* parameter changes at run time start from these (kept in r->params) */
+    config.gear_params = &p->gear;
+    config.rack_params = &p->rack;
+    config.rig_params = &p->rig;
+    config.deferred_prepare = live; /* the paced loop derives them after its flush */
     gs_hil_error herr;
     if (gs_hil_bridge_init(&r->bridge, &config, p->block, &r->consts, &r->state, &herr) != GS_HIL_OK) {
         runner_die("--%s: %s", herr.parameter, herr.message);
@@ -90,6 +95,19 @@ static void print_text(const runner *r)
         }
     }
     fprintf(out, "%-22s %.6f s\n", "simulated_time", (double)c->count[GS_HIL_COUNT_PERIODS] * b->period_s);
+    if (b->scenario != NULL) {
+        unsigned passed, failed, pending;
+        gs_hil_verdict_counts(b, &passed, &failed, &pending);
+        fprintf(out, "%-22s %u passed, %u failed (%s)\n", "verdict", passed, failed + pending, b->scenario->name);
+    }
+    if (r->options.log != NULL) {
+        fprintf(out, "%-22s %llu frames (%llu dropped)\n", "log", (unsigned long long)r->report.log_written,
+                (unsigned long long)c->count[GS_HIL_COUNT_LOG_DROPPED]);
+    }
+    if (r->bus.kind == TRANSPORT_SOCKETCAND && r->report.live) {
+        fprintf(out, "%-22s %llu connects, %llu disconnects\n", "socketcand_clients",
+                (unsigned long long)r->report.client_connects, (unsigned long long)r->report.client_disconnects);
+    }
     if (r->report.live) {
         const loop_histogram *late = &r->stats.lateness;
         fprintf(out, "%-22s %.3f / %.3f / %.3f us (median / p99 / max)\n", "lateness",
@@ -141,6 +159,14 @@ static void print_json(const runner *r)
                  "\"wall_time\": %.6f, \"cpu_time\": %.6f",
             (unsigned long long)rep->frames_in, (unsigned long long)rep->frames_out,
             (unsigned long long)rep->malformed_lines, (unsigned long long)rep->write_errors, rep->wall_s, rep->cpu_s);
+    fprintf(out, ", \"client_connects\": %llu, \"client_disconnects\": %llu, \"log_written\": %llu",
+            (unsigned long long)rep->client_connects, (unsigned long long)rep->client_disconnects,
+            (unsigned long long)rep->log_written);
+    if (r->bridge.scenario != NULL) {
+        unsigned passed, failed, pending;
+        gs_hil_verdict_counts(&r->bridge, &passed, &failed, &pending);
+        fprintf(out, ", \"verdict\": {\"passed\": %u, \"failed\": %u}", passed, failed + pending);
+    }
     if (rep->live) {
         fprintf(out, ", \"cpu_share\": %.6f, \"loop\": {", rep->wall_s > 0 ? rep->cpu_s / rep->wall_s : 0.0);
         loop_histogram_json(out, "lateness", &r->stats.lateness);

@@ -9,13 +9,14 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "gearsim/hil.h"
+#include "internal.h"
 
 /* The counters whose growth sets the latched flags, in flag order from
  * GS_HIL_FLAG_CMD_REJECTED on. */
 static const gs_hil_count latched_counts[GS_HIL_LATCHED_FLAGS] = {
-    GS_HIL_COUNT_RX_REJECTED, GS_HIL_COUNT_RX_LATE, GS_HIL_COUNT_SATURATIONS,
-    GS_HIL_COUNT_OVERRUNS,    GS_HIL_COUNT_TX_ERRORS,
+    GS_HIL_COUNT_RX_REJECTED,   GS_HIL_COUNT_RX_LATE,        GS_HIL_COUNT_SATURATIONS,
+    GS_HIL_COUNT_OVERRUNS,      GS_HIL_COUNT_TX_ERRORS,      GS_HIL_COUNT_PARAM_CHANGES,
+    GS_HIL_COUNT_PARAM_REFUSED, GS_HIL_COUNT_LOG_DROPPED,
 };
 
 static gs_hil_count reason_class(gs_hil_reason reason)
@@ -136,8 +137,10 @@ gs_hil_status gs_hil_bridge_init(gs_hil_bridge *b, const gs_hil_config *config, 
     b->dirty = 1;
     b->flag_state[GS_HIL_FLAG_CMD_TIMEOUT] = 1;
     b->flag_state[GS_HIL_FLAG_SAFE_STATE] = 1;
-    b->input.ambient_temperature = config->ambient_temperature_K;
-    b->input.measured_temperature = config->ambient_temperature_K;
+    b->commanded.ambient_temperature = config->ambient_temperature_K;
+    b->commanded.measured_temperature = config->ambient_temperature_K;
+    b->input = b->commanded;
+    gs_hil_init_tuning_(b, block);
     return GS_HIL_OK;
 }
 
@@ -147,7 +150,7 @@ unsigned gs_hil_pending(const gs_hil_bridge *b)
     for (unsigned i = 0; i < b->command_count; ++i) {
         n += b->commands[i].has_pending ? 1u : 0u;
     }
-    return n;
+    return n + b->request_count;
 }
 
 static const gs_hil_frame_spec *find_frame(const gs_hil_dbc *dbc, const gs_hil_frame *frame, unsigned *index)
@@ -159,6 +162,39 @@ static const gs_hil_frame_spec *find_frame(const gs_hil_dbc *dbc, const gs_hil_f
         }
     }
     return NULL;
+}
+
+/* The value of the signal with role in a decoded frame's data (0 without). */
+static double role_value(const gs_hil_frame_spec *spec, const uint8_t *data, gs_hil_role role)
+{
+    for (unsigned s = 0; s < spec->signal_count; ++s) {
+        if (spec->signals[s].role == role) {
+            return gs_hil_signal_value(&spec->signals[s], data);
+        }
+    }
+    return 0.0;
+}
+
+/* A parameter frame: decoded and range-checked as a command is, then queued
+ * (or refused: counted and acknowledged). */
+static gs_hil_reason handle_param(gs_hil_bridge *b, const gs_hil_frame_spec *spec, const gs_hil_frame *frame)
+{
+    gs_hil_command unused;
+    gs_hil_reason decoded = gs_hil_decode_command(spec, frame->data, frame->length, &unused);
+    if (decoded != GS_HIL_PENDING) {
+        return count_reason(b, decoded);
+    }
+    uint8_t data[GS_HIL_MAX_DATA] = {0};
+    memcpy(data, frame->data, frame->length);
+    double id = role_value(spec, data, GS_HIL_ROLE_PARAM_ID);
+    double element = role_value(spec, data, GS_HIL_ROLE_PARAM_ELEMENT);
+    double value = role_value(spec, data, GS_HIL_ROLE_PARAM_VALUE);
+    /* the index signals are unsigned integers (gs_hil_dbc_check) */
+    gs_hil_param_result r = gs_hil_request_param(b, (unsigned)id, (unsigned)element, value);
+    if (r == GS_HIL_PARAM_APPLIED) {
+        return GS_HIL_PENDING;
+    }
+    return r == GS_HIL_PARAM_BUSY ? GS_HIL_REJECTED_PARAM_BUSY : GS_HIL_REJECTED_BAD_PARAM; /* counted */
 }
 
 gs_hil_reason gs_hil_handle(gs_hil_bridge *b, const gs_hil_frame *frame)
@@ -176,8 +212,11 @@ gs_hil_reason gs_hil_handle(gs_hil_bridge *b, const gs_hil_frame *frame)
     if (spec == NULL) {
         return count_reason(b, GS_HIL_REJECTED_UNKNOWN_ID);
     }
-    if (b->kind[index] == GS_HIL_FRAME_FEEDBACK) {
+    if (b->kind[index] == GS_HIL_FRAME_FEEDBACK || b->kind[index] == GS_HIL_FRAME_ACK) {
         return count_reason(b, GS_HIL_IGNORED_FEEDBACK_ID);
+    }
+    if (b->kind[index] == GS_HIL_FRAME_PARAM) {
+        return handle_param(b, spec, frame);
     }
     if (b->kind[index] == GS_HIL_FRAME_OTHER) {
         return count_reason(b, GS_HIL_IGNORED_OTHER_DBC_FRAME);
@@ -270,7 +309,7 @@ static void update_state(gs_hil_bridge *b)
     b->flag_state[GS_HIL_FLAG_CMD_TIMEOUT] = stale;
     b->flag_state[GS_HIL_FLAG_SAFE_STATE] = safe;
     b->flag_state[GS_HIL_FLAG_DRIVE_DISABLED] = disabled;
-    gs_rig_input *in = &b->input;
+    gs_rig_input *in = &b->commanded;
     in->base_speed = 0;
     in->base_torque = 0;
     in->load = 0;
@@ -303,9 +342,9 @@ static double angle_modulo(double x)
 }
 
 /* The model's value of a feedback signal this period: an output or an input
- * the rig applied. A fault stage (offsets, drops, stuck values) belongs
- * between this and the encoder. */
-static double model_value(const gs_hil_bridge *b, const gs_hil_signal *sig)
+ * the rig applied. The fault stage (fault.c) acts between this and the
+ * encoder. */
+double gs_hil_model_value_(const gs_hil_bridge *b, const gs_hil_signal *sig)
 {
     const gs_real *out = (const gs_real *)(const void *)&b->output;
     switch (sig->role) {
@@ -328,9 +367,57 @@ static double model_value(const gs_hil_bridge *b, const gs_hil_signal *sig)
     case GS_HIL_ROLE_STATUS_COUNTER:
     case GS_HIL_ROLE_STATUS_FLAG:
     case GS_HIL_ROLE_STATUS_COUNT:
+    case GS_HIL_ROLE_PARAM_ID:
+    case GS_HIL_ROLE_PARAM_ELEMENT:
+    case GS_HIL_ROLE_PARAM_VALUE:
+    case GS_HIL_ROLE_ACK_ID:
+    case GS_HIL_ROLE_ACK_ELEMENT:
+    case GS_HIL_ROLE_ACK_VALUE:
+    case GS_HIL_ROLE_ACK_RESULT:
     case GS_HIL_ROLES:
     default:
         return nan("");
+    }
+}
+
+/* The value a command signal has in the command applied this period (NaN
+ * before any). */
+static double command_value(const gs_hil_bridge *b, unsigned frame, unsigned signal)
+{
+    const gs_hil_signal *sig = &b->config.dbc->frames[frame].signals[signal];
+    int slot = gs_hil_role_command_index(sig->role);
+    const gs_hil_command_slot *c = &b->commands[b->command_index[frame]];
+    if (slot < 0 || !c->has_held || !c->held.present[slot]) {
+        return nan("");
+    }
+    return c->held.value[slot];
+}
+
+double gs_hil_source_value_(const gs_hil_bridge *b, const gs_hil_condition *c)
+{
+    switch (c->source) {
+    case GS_HIL_SOURCE_FEEDBACK:
+        return gs_hil_model_value_(b, &b->config.dbc->frames[c->frame].signals[c->signal]);
+    case GS_HIL_SOURCE_COMMAND:
+        return command_value(b, c->frame, c->signal);
+    case GS_HIL_SOURCE_FLAG:
+    default:
+        return b->flag_state[c->flag] ? 1.0 : 0.0;
+    }
+}
+
+int gs_hil_condition_holds_(const gs_hil_bridge *b, const gs_hil_condition *c)
+{
+    double x = gs_hil_source_value_(b, c), v = c->value;
+    switch (c->op) {
+    case GS_HIL_OP_LT: return x < v;
+    case GS_HIL_OP_LE: return x <= v;
+    case GS_HIL_OP_GT: return x > v;
+    case GS_HIL_OP_GE: return x >= v;
+    case GS_HIL_OP_EQ: return x <= v && x >= v;
+    case GS_HIL_OP_NE: return x < v || x > v;
+    case GS_HIL_OPS:
+    default: return 0;
     }
 }
 
@@ -349,6 +436,10 @@ static uint64_t status_raw(gs_hil_bridge *b, unsigned frame_index, const gs_hil_
                            int latched[GS_HIL_LATCHED_FLAGS], int *have_latched)
 {
     if (sig->role == GS_HIL_ROLE_STATUS_COUNTER) {
+        uint64_t held;
+        if (b->fault_count > 0u && gs_hil_fault_counter_(b, frame_index, b->status_seq[frame_index], &held)) {
+            return held; /* counter_stop: the counter does not move */
+        }
         return b->status_seq[frame_index]++;
     }
     if (sig->role == GS_HIL_ROLE_STATUS_COUNT) {
@@ -380,11 +471,63 @@ static void encode_frame(gs_hil_bridge *b, unsigned frame_index, gs_hil_frame *f
         const gs_hil_signal *sig = &spec->signals[s];
         if (is_status_signal(sig)) {
             gs_hil_put_raw(sig, status_raw(b, frame_index, sig, latched, &have_latched), frame->data);
-        } else if (gs_hil_put_value(sig, model_value(b, sig), frame->data) && sig->role != GS_HIL_ROLE_NONE) {
+            continue;
+        }
+        double x = gs_hil_model_value_(b, sig);
+        if (b->fault_count > 0u) {
+            x = gs_hil_fault_value_(b, frame_index, s, x);
+        }
+        if (gs_hil_put_value(sig, x, frame->data) && sig->role != GS_HIL_ROLE_NONE) {
             b->counters.count[GS_HIL_COUNT_SATURATIONS] += 1u;
             frame->saturated |= (uint64_t)1 << s;
         }
     }
+}
+
+static void send(gs_hil_bridge *b, const gs_hil_frame *frame)
+{
+    if (b->config.send != NULL && b->config.send(b->config.send_context, frame) != 0) {
+        b->counters.count[GS_HIL_COUNT_TX_ERRORS] += 1u;
+    } else {
+        b->counters.count[GS_HIL_COUNT_TX_FRAMES] += 1u;
+    }
+}
+
+static void start_frame(const gs_hil_bridge *b, const gs_hil_frame_spec *spec, gs_hil_frame *frame)
+{
+    memset(frame, 0, sizeof *frame);
+    frame->timestamp_s = b->config.stamp_origin_s + (double)b->counters.count[GS_HIL_COUNT_PERIODS] * b->period_s;
+    frame->id = spec->id;
+    frame->is_extended = spec->is_extended;
+    frame->length = spec->length;
+}
+
+/* The acknowledgements of the parameter requests settled this period. */
+static void emit_acks(gs_hil_bridge *b)
+{
+    const gs_hil_dbc *dbc = b->config.dbc;
+    for (unsigned i = 0; i < dbc->frame_count && b->ack_count > 0u; ++i) {
+        if (b->kind[i] != GS_HIL_FRAME_ACK) {
+            continue;
+        }
+        const gs_hil_frame_spec *spec = &dbc->frames[i];
+        for (unsigned k = 0; k < b->ack_count; ++k) {
+            const gs_hil_param_request *r = &b->acks[k];
+            gs_hil_frame frame;
+            start_frame(b, spec, &frame);
+            for (unsigned s = 0; s < spec->signal_count; ++s) {
+                const gs_hil_signal *sig = &spec->signals[s];
+                double x = sig->role == GS_HIL_ROLE_ACK_ID        ? (double)r->index
+                           : sig->role == GS_HIL_ROLE_ACK_ELEMENT ? (double)r->element
+                           : sig->role == GS_HIL_ROLE_ACK_VALUE   ? r->value
+                           : sig->role == GS_HIL_ROLE_ACK_RESULT  ? (double)r->result
+                                                                  : 0.0;
+                (void)gs_hil_put_value(sig, x, frame.data); /* clamped, never wrapped; not a feedback saturation */
+            }
+            send(b, &frame);
+        }
+    }
+    b->ack_count = 0;
 }
 
 static void emit(gs_hil_bridge *b)
@@ -396,19 +539,14 @@ static void emit(gs_hil_bridge *b)
         if (n % b->cycle_periods[i] != 0u) {
             continue;
         }
-        const gs_hil_frame_spec *spec = &b->config.dbc->frames[i];
-        memset(&frame, 0, sizeof frame);
-        frame.timestamp_s = b->config.stamp_origin_s + (double)n * b->period_s;
-        frame.id = spec->id;
-        frame.is_extended = spec->is_extended;
-        frame.length = spec->length;
+        start_frame(b, &b->config.dbc->frames[i], &frame);
         encode_frame(b, i, &frame);
-        if (b->config.send != NULL && b->config.send(b->config.send_context, &frame) != 0) {
-            b->counters.count[GS_HIL_COUNT_TX_ERRORS] += 1u;
-        } else {
-            b->counters.count[GS_HIL_COUNT_TX_FRAMES] += 1u;
+        unsigned copies = b->fault_count > 0u ? gs_hil_fault_frame_(b, i, &frame) : 1u;
+        for (unsigned c = 0; c < copies; ++c) {
+            send(b, &frame);
         }
     }
+    emit_acks(b);
 }
 
 void gs_hil_advance(gs_hil_bridge *b, uint64_t periods)
@@ -419,15 +557,32 @@ void gs_hil_advance(gs_hil_bridge *b, uint64_t periods)
     for (uint64_t p = 0; p < periods; ++p) {
         apply_pending(b);
         uint64_t now = b->counters.count[GS_HIL_COUNT_PERIODS];
+        gs_hil_swap_params_(b); /* the parameter requests due now take effect */
+        if (b->scenario != NULL) {
+            gs_hil_scenario_start_(b, now);
+        }
         if (b->dirty || (!b->timed_out && now >= b->stale_at)) {
             update_state(b);
+        }
+        b->input = b->commanded;
+        if (b->has_load) { /* the scenario's load adds to the commanded one */
+            b->input.load = (gs_real)((double)b->commanded.load + gs_hil_scenario_load_(b, now));
         }
         for (unsigned s = 0; s < b->config.substeps; ++s) {
             gs_rig_step(b->consts, b->state, &b->input, &b->output);
         }
         b->counters.steps += b->config.substeps;
         b->counters.count[GS_HIL_COUNT_PERIODS] = now + 1u;
+        if (b->fault_count > 0u) {
+            gs_hil_faults_update_(b, now);
+        }
+        if (b->scenario != NULL) {
+            gs_hil_scenario_end_(b, now);
+        }
         emit(b);
+        if (!b->config.deferred_prepare) {
+            gs_hil_prepare(b);
+        }
     }
 }
 
@@ -463,5 +618,9 @@ void gs_hil_close(gs_hil_bridge *b)
             count_reason(b, GS_HIL_LATE_AFTER_STOP);
         }
     }
+    for (unsigned i = 0; i < b->request_count; ++i) {
+        count_reason(b, GS_HIL_LATE_AFTER_STOP);
+    }
+    b->request_count = 0;
     b->closed = 1;
 }

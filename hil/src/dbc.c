@@ -18,6 +18,9 @@ static const char *const mode_names[GS_HIL_MODES] = {GS_HIL_MODE_LIST(GS_HIL_NAM
 static const char *const flag_names[GS_HIL_FLAGS] = {GS_HIL_FLAG_LIST(GS_HIL_NAME_)};
 static const char *const count_names[GS_HIL_COUNTS] = {GS_HIL_COUNT_LIST(GS_HIL_NAME_)};
 static const char *const reason_names[GS_HIL_REASONS] = {GS_HIL_REASON_LIST(GS_HIL_NAME_)};
+static const char *const result_names[GS_HIL_PARAM_RESULTS] = {GS_HIL_PARAM_RESULT_LIST(GS_HIL_NAME_)};
+static const char *const fault_names[GS_HIL_FAULTS] = {GS_HIL_FAULT_LIST(GS_HIL_NAME_)};
+static const char *const op_names[GS_HIL_OPS] = {GS_HIL_OP_LIST(GS_HIL_NAME_)};
 
 typedef struct {
     gs_hil_mode mode;
@@ -54,6 +57,21 @@ const char *gs_hil_count_name(gs_hil_count count)
 const char *gs_hil_reason_name(gs_hil_reason reason)
 {
     return name_in(reason_names, GS_HIL_REASONS, (unsigned)reason);
+}
+
+const char *gs_hil_param_result_name(gs_hil_param_result result)
+{
+    return name_in(result_names, GS_HIL_PARAM_RESULTS, (unsigned)result);
+}
+
+const char *gs_hil_fault_name(gs_hil_fault_kind kind)
+{
+    return name_in(fault_names, GS_HIL_FAULTS, (unsigned)kind);
+}
+
+const char *gs_hil_op_name(gs_hil_op op)
+{
+    return name_in(op_names, GS_HIL_OPS, (unsigned)op);
 }
 
 /* Index of name in names[0..count), or -1. */
@@ -181,6 +199,13 @@ int gs_hil_role_command_index(gs_hil_role role)
     case GS_HIL_ROLE_STATUS_COUNTER:
     case GS_HIL_ROLE_STATUS_FLAG:
     case GS_HIL_ROLE_STATUS_COUNT:
+    case GS_HIL_ROLE_PARAM_ID:
+    case GS_HIL_ROLE_PARAM_ELEMENT:
+    case GS_HIL_ROLE_PARAM_VALUE:
+    case GS_HIL_ROLE_ACK_ID:
+    case GS_HIL_ROLE_ACK_ELEMENT:
+    case GS_HIL_ROLE_ACK_VALUE:
+    case GS_HIL_ROLE_ACK_RESULT:
     case GS_HIL_ROLES:
     default:
         return -1;
@@ -192,16 +217,42 @@ static int is_status_role(gs_hil_role role)
     return role == GS_HIL_ROLE_STATUS_COUNTER || role == GS_HIL_ROLE_STATUS_FLAG || role == GS_HIL_ROLE_STATUS_COUNT;
 }
 
+static int is_param_role(gs_hil_role role)
+{
+    return role == GS_HIL_ROLE_PARAM_ID || role == GS_HIL_ROLE_PARAM_ELEMENT || role == GS_HIL_ROLE_PARAM_VALUE;
+}
+
+static int is_ack_role(gs_hil_role role)
+{
+    return role == GS_HIL_ROLE_ACK_ID || role == GS_HIL_ROLE_ACK_ELEMENT || role == GS_HIL_ROLE_ACK_VALUE ||
+           role == GS_HIL_ROLE_ACK_RESULT;
+}
+
+/* The kind of frame a role makes (OTHER for no role). */
+static gs_hil_frame_kind kind_of_role(gs_hil_role role)
+{
+    if (role == GS_HIL_ROLE_NONE) {
+        return GS_HIL_FRAME_OTHER;
+    }
+    if (gs_hil_role_command_index(role) >= 0) {
+        return GS_HIL_FRAME_COMMAND;
+    }
+    if (is_param_role(role)) {
+        return GS_HIL_FRAME_PARAM;
+    }
+    return is_ack_role(role) ? GS_HIL_FRAME_ACK : GS_HIL_FRAME_FEEDBACK;
+}
+
 gs_hil_frame_kind gs_hil_frame_kind_of(const gs_hil_frame_spec *spec)
 {
     gs_hil_frame_kind kind = GS_HIL_FRAME_OTHER;
     for (unsigned s = 0; s < spec->signal_count; ++s) {
-        gs_hil_role role = spec->signals[s].role;
-        if (gs_hil_role_command_index(role) >= 0) {
-            return GS_HIL_FRAME_COMMAND;
+        gs_hil_frame_kind k = kind_of_role(spec->signals[s].role);
+        if (k == GS_HIL_FRAME_COMMAND) {
+            return k; /* a frame with any command role is a command frame */
         }
-        if (role != GS_HIL_ROLE_NONE) {
-            kind = GS_HIL_FRAME_FEEDBACK;
+        if (k != GS_HIL_FRAME_OTHER && kind == GS_HIL_FRAME_OTHER) {
+            kind = k;
         }
     }
     return kind;
@@ -309,7 +360,8 @@ static gs_hil_status check_range(const gs_hil_frame_spec *f, const gs_hil_signal
     }
     /* the tolerance absorbs the decimal rounding of DBC limits */
     double tol = fabs(sig->scale) * 1e-6;
-    int feedback = sig->role != GS_HIL_ROLE_NONE && gs_hil_role_command_index(sig->role) < 0;
+    gs_hil_frame_kind from = kind_of_role(sig->role); /* what the rig sends must never wrap */
+    int feedback = from == GS_HIL_FRAME_FEEDBACK || from == GS_HIL_FRAME_ACK;
     if (feedback && (minimum < low - tol || maximum > high + tol)) {
         return refuse(err, "%s.%s: range [%.10g, %.10g] does not fit %u %s bits at scale %.10g ([%.10g, %.10g]); "
                            "values would wrap",
@@ -344,10 +396,13 @@ static gs_hil_status check_role(const gs_hil_frame_spec *f, const gs_hil_signal 
                       (int)sig->role, (unsigned long)sig->aux);
     }
     int counter = sig->role == GS_HIL_ROLE_STATUS_COUNT || sig->role == GS_HIL_ROLE_STATUS_COUNTER;
-    if (counter && (sig->is_float || sig->is_signed || sig->scale < 1.0 || sig->scale > 1.0 || sig->offset < 0.0 ||
-                    sig->offset > 0.0)) {
-        return refuse(err, "%s.%s: a counter must be an unsigned integer signal (scale 1, offset 0)", f->name,
-                      sig->name);
+    int index = sig->role == GS_HIL_ROLE_PARAM_ID || sig->role == GS_HIL_ROLE_PARAM_ELEMENT ||
+                sig->role == GS_HIL_ROLE_ACK_ID || sig->role == GS_HIL_ROLE_ACK_ELEMENT ||
+                sig->role == GS_HIL_ROLE_ACK_RESULT;
+    if ((counter || index) && (sig->is_float || sig->is_signed || sig->scale < 1.0 || sig->scale > 1.0 ||
+                               sig->offset < 0.0 || sig->offset > 0.0)) {
+        return refuse(err, "%s.%s: a %s must be an unsigned integer signal (scale 1, offset 0)", f->name, sig->name,
+                      counter ? "counter" : "parameter index or result");
     }
     double minimum, maximum;
     gs_hil_signal_limits(sig, &minimum, &maximum);
@@ -378,23 +433,22 @@ static gs_hil_status check_signal(const gs_hil_frame_spec *f, gs_hil_frame_kind 
     return sig->role == GS_HIL_ROLE_NONE ? GS_HIL_OK : check_role(f, sig, err);
 }
 
+static const char *const kind_names[] = {"command", "feedback", "other", "parameter", "acknowledgement"};
+
 static gs_hil_status check_frame(const gs_hil_frame_spec *f, gs_hil_error *err)
 {
     gs_hil_frame_kind kind = gs_hil_frame_kind_of(f);
-    int commands = 0, others = 0;
     for (unsigned s = 0; s < f->signal_count; ++s) {
-        gs_hil_role role = f->signals[s].role;
-        commands += gs_hil_role_command_index(role) >= 0;
-        others += role != GS_HIL_ROLE_NONE && gs_hil_role_command_index(role) < 0;
-    }
-    if (commands > 0 && others > 0) {
-        return refuse(err, "%s mixes command and feedback roles", f->name);
+        gs_hil_frame_kind k = kind_of_role(f->signals[s].role);
+        if (k != GS_HIL_FRAME_OTHER && k != kind) {
+            return refuse(err, "%s mixes %s and %s roles", f->name, kind_names[kind], kind_names[k]);
+        }
     }
     if (kind == GS_HIL_FRAME_FEEDBACK && f->cycle_ms == 0u) {
         return refuse(err, "feedback frame %s has no GenMsgCycleTime", f->name);
     }
     if (kind != GS_HIL_FRAME_OTHER && f->is_multiplexed) {
-        return refuse(err, "%s: multiplexed frames are not supported for commands or feedback", f->name);
+        return refuse(err, "%s: multiplexed frames are not supported for commands, parameters or feedback", f->name);
     }
     if (kind != GS_HIL_FRAME_OTHER && f->length > GS_HIL_MAX_DATA) {
         return refuse(err, "%s: %u data bytes; command and feedback frames are classic CAN frames of at most %u",
@@ -411,25 +465,32 @@ static gs_hil_status check_frame(const gs_hil_frame_spec *f, gs_hil_error *err)
     return GS_HIL_OK;
 }
 
-/* A command role on one signal of the whole DBC only. */
-static gs_hil_status check_command_roles(const gs_hil_dbc *dbc, gs_hil_error *err)
+/* A command, parameter or acknowledgement role on one signal of the whole
+ * DBC only; a parameter frame with its index and value. */
+static gs_hil_status check_unique_roles(const gs_hil_dbc *dbc, gs_hil_error *err)
 {
-    const gs_hil_frame_spec *frame_of[GS_HIL_CMD_ROLES] = {NULL};
-    const gs_hil_signal *signal_of[GS_HIL_CMD_ROLES] = {NULL};
+    const gs_hil_frame_spec *frame_of[GS_HIL_ROLES] = {NULL};
+    const gs_hil_signal *signal_of[GS_HIL_ROLES] = {NULL};
     for (unsigned i = 0; i < dbc->frame_count; ++i) {
         const gs_hil_frame_spec *f = &dbc->frames[i];
         for (unsigned s = 0; s < f->signal_count; ++s) {
-            int slot = gs_hil_role_command_index(f->signals[s].role);
-            if (slot < 0) {
+            gs_hil_role role = f->signals[s].role;
+            gs_hil_frame_kind k = kind_of_role(role);
+            if (k != GS_HIL_FRAME_COMMAND && k != GS_HIL_FRAME_PARAM && k != GS_HIL_FRAME_ACK) {
                 continue;
             }
-            if (signal_of[slot] != NULL) {
-                return refuse(err, "command role '%s' is on %s.%s and on %s.%s", gs_hil_role_name(f->signals[s].role),
-                              frame_of[slot]->name, signal_of[slot]->name, f->name, f->signals[s].name);
+            if (signal_of[role] != NULL) {
+                return refuse(err, "%s role '%s' is on %s.%s and on %s.%s", kind_names[k], gs_hil_role_name(role),
+                              frame_of[role]->name, signal_of[role]->name, f->name, f->signals[s].name);
             }
-            frame_of[slot] = f;
-            signal_of[slot] = &f->signals[s];
+            frame_of[role] = f;
+            signal_of[role] = &f->signals[s];
         }
+    }
+    int any_param = signal_of[GS_HIL_ROLE_PARAM_ID] != NULL || signal_of[GS_HIL_ROLE_PARAM_ELEMENT] != NULL ||
+                    signal_of[GS_HIL_ROLE_PARAM_VALUE] != NULL;
+    if (any_param && (signal_of[GS_HIL_ROLE_PARAM_ID] == NULL || signal_of[GS_HIL_ROLE_PARAM_VALUE] == NULL)) {
+        return refuse(err, "a parameter frame needs a param.id and a param.value signal");
     }
     return GS_HIL_OK;
 }
@@ -442,15 +503,22 @@ gs_hil_status gs_hil_dbc_check(const gs_hil_dbc *dbc, gs_hil_error *err)
     if (dbc->frame_count > GS_HIL_MAX_FRAMES) {
         return refuse(err, "%u frames; at most %u", dbc->frame_count, GS_HIL_MAX_FRAMES);
     }
-    unsigned command_frames = 0;
+    unsigned command_frames = 0, param_frames = 0, ack_frames = 0;
     for (unsigned i = 0; i < dbc->frame_count; ++i) {
         if (check_frame(&dbc->frames[i], err) != GS_HIL_OK) {
             return GS_HIL_E_CONFIG;
         }
-        command_frames += gs_hil_frame_kind_of(&dbc->frames[i]) == GS_HIL_FRAME_COMMAND;
+        gs_hil_frame_kind kind = gs_hil_frame_kind_of(&dbc->frames[i]);
+        command_frames += kind == GS_HIL_FRAME_COMMAND;
+        param_frames += kind == GS_HIL_FRAME_PARAM;
+        ack_frames += kind == GS_HIL_FRAME_ACK;
     }
     if (command_frames > GS_HIL_MAX_COMMAND_FRAMES) {
         return refuse(err, "%u command frames; at most %u", command_frames, GS_HIL_MAX_COMMAND_FRAMES);
     }
-    return check_command_roles(dbc, err);
+    if (param_frames > 1u || ack_frames > 1u) {
+        return refuse(err, "%u parameter and %u acknowledgement frames; at most one of each", param_frames,
+                      ack_frames);
+    }
+    return check_unique_roles(dbc, err);
 }

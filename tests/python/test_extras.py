@@ -371,8 +371,9 @@ def test_table_matches_pyproject():
         if not r.startswith("gearsim[")
     }
     assert set(extras["all"]) == union
-    # the test tooling: pytest, hypothesis, and build for the sdist of scripts/package_check.sh
-    assert {_distribution(r) for r in extras["test"]} == {"pytest", "hypothesis", "build"}
+    # the test tooling: pytest, hypothesis, build for the sdist of scripts/package_check.sh,
+    # xmlschema for the JUnit verdicts of the HIL scenarios (tests/python/hil/junit.xsd)
+    assert {_distribution(r) for r in extras["test"]} == {"pytest", "hypothesis", "build", "xmlschema"}
     assert set(extras["bench"]) <= set(extras["analysis"])
 
 

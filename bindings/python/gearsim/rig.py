@@ -303,6 +303,7 @@ class Rig:
         # The constants are read-only after init (shared by copies); the state
         # is what a step changes (a snapshot is a copy of it).
         self._consts = consts
+        self._c_rig_params = c_params  # what init took: the HIL bridge changes parameters from it
         self._state = state
         self._stepper, self._step_out = _stepper(consts, state)
         self._ambient = float(full["ambient_temperature"])

@@ -94,6 +94,7 @@ typedef struct {
     unsigned sent;
     uint32_t last_id;
     uint8_t last_data[8];
+    uint8_t counters_data[8]; /* the last GearCounters frame */
 } sink;
 
 static int capture(void *context, const gs_hil_frame *frame)
@@ -102,6 +103,9 @@ static int capture(void *context, const gs_hil_frame *frame)
     s->sent++;
     s->last_id = frame->id;
     memcpy(s->last_data, frame->data, 8);
+    if (frame->id == 0x211u) {
+        memcpy(s->counters_data, frame->data, 8);
+    }
     return 0;
 }
 
@@ -212,12 +216,16 @@ static void test_feedback_cycles_and_status(void **unused)
     init_gear_bridge(0.1);
     gs_hil_advance(&bridge, 10); /* 10 ms: GearFbBase and GearFbFollower */
     assert_int_equal(out.sent, 2);
-    gs_hil_advance(&bridge, 90); /* 100 ms: 10 x 2 + thermal, status, counters */
-    assert_int_equal(out.sent, 23);
-    assert_int_equal(out.last_id, 0x211);
+    gs_hil_advance(&bridge, 90); /* 100 ms: 10 x 2 + thermal, status, counters, faults */
+    assert_int_equal(out.sent, 24);
+    assert_int_equal(out.last_id, 0x212);
     /* GearCounters: TxFrames (16|16) counts the 22 frames sent before it */
-    assert_int_equal(out.last_data[2] | (out.last_data[3] << 8), 22);
-    assert_int_equal(bridge.counters.count[GS_HIL_COUNT_TX_FRAMES], 23);
+    assert_int_equal(out.counters_data[2] | (out.counters_data[3] << 8), 22);
+    /* GearFaults: no fault, no parameter change, nothing dropped */
+    for (unsigned k = 0; k < 8; ++k) {
+        assert_int_equal(out.last_data[k], 0);
+    }
+    assert_int_equal(bridge.counters.count[GS_HIL_COUNT_TX_FRAMES], 24);
 }
 
 /* Replay in log time: a frame t after the log's first is handled at the

@@ -72,10 +72,10 @@ static void test_builtin_tables_pass_and_have_kinds(void **unused)
     const gs_hil_dbc *d = &gs_hil_dbc_gear_rig;
     assert_int_equal(gs_hil_frame_kind_of(&d->frames[0]), GS_HIL_FRAME_COMMAND); /* GearCmd */
     unsigned order[GS_HIL_MAX_FRAMES];
-    assert_int_equal(gs_hil_feedback_order(d, order), 5);
-    /* data frames by ID, then status frames by ID */
-    const uint32_t ids[5] = {0x200, 0x201, 0x202, 0x210, 0x211};
-    for (unsigned k = 0; k < 5; ++k) {
+    assert_int_equal(gs_hil_feedback_order(d, order), 6);
+    /* data frames by ID, then status frames by ID; not the parameter acknowledgement */
+    const uint32_t ids[6] = {0x200, 0x201, 0x202, 0x210, 0x211, 0x212};
+    for (unsigned k = 0; k < 6; ++k) {
         assert_int_equal(d->frames[order[k]].id, ids[k]);
         assert_int_equal(gs_hil_frame_is_status(&d->frames[order[k]]), k >= 3);
     }
@@ -147,7 +147,7 @@ static void test_every_rule_is_refused(void **unused)
     refused(f, 1, "feedback frame Fb has no GenMsgCycleTime");
     f[0] = frame("Fb", 0x200, 2, 10, s, 1);
     f[0].is_multiplexed = 1;
-    refused(f, 1, "Fb: multiplexed frames are not supported for commands or feedback");
+    refused(f, 1, "Fb: multiplexed frames are not supported for commands, parameters or feedback");
     f[0] = frame("Fb", 0x200, 16, 10, s, 1);
     refused(f, 1, "Fb: 16 data bytes; command and feedback frames are classic CAN frames");
     f[0] = frame("Fb", 0x200, 1, 10, s, 1);
@@ -162,7 +162,7 @@ static void test_every_rule_is_refused(void **unused)
     s[0].offset = 2.0;
     refused(f, 1, "St.F: a flag must hold 0 and 1");
     s[0] = sig("F", 0, 1, 0, 1.0, 0.0, 1.0, GS_HIL_ROLE_STATUS_FLAG, GS_HIL_FLAGS); /* no such flag */
-    refused(f, 1, "St.F: role 11 (aux 8) is not a role of gearsim/hil.h");
+    refused(f, 1, "St.F: role 11 (aux 12) is not a role of gearsim/hil.h");
     s[0] = sig("L", 0, 16, 1, 0.001, -30.0, 30.0, GS_HIL_ROLE_CMD_LOAD, 0);
     s[1] = sig("T", 16, 16, 1, 0.001, -30.0, 30.0, GS_HIL_ROLE_OUT, GS_HIL_OUTPUT_INDEX(base_torque));
     f[0] = frame("Mix", 0x100, 4, 10, s, 2);

@@ -50,10 +50,10 @@ def test_shipped_dbc_tables(tmp_path: Path) -> None:
     assert "GS_HIL_ROLE_STATUS_COUNT, GS_HIL_COUNT_RX_USED" in text
     # DriveMode's value table as the DBC has it (the library reads the names)
     assert '{{0, "Disabled"}, {1, "Speed"}, {2, "Torque"}}' in text
-    # GearStatus (0x210), 8 bytes, 100 ms, not multiplexed, 12 signals
-    assert '{"GearStatus", 0x210u, 0, 8u, 100u, 0, signals_210, 12u}' in text
+    # GearStatus (0x210), 8 bytes, 100 ms, not multiplexed, 16 signals
+    assert '{"GearStatus", 0x210u, 0, 8u, 100u, 0, signals_210, 16u}' in text
     assert '{"GearCmd", 0x100u, 0, 8u, 10u, 0, signals_100, 4u}' in text
-    assert 'gs_hil_dbc_gear_rig = {"gear_rig", GS_RIG_SIMPLE_GEAR, frames, 6u}' in text
+    assert 'gs_hil_dbc_gear_rig = {"gear_rig", GS_RIG_SIMPLE_GEAR, frames, 9u}' in text
 
 
 def test_facts_are_written_as_the_dbc_gives_them(tmp_path: Path) -> None:

@@ -83,10 +83,10 @@ def test_gear_feedback_matches_the_rig_stepped_directly(
     bridge, peer = link
     seen = _check_against_reference(bridge, peer, gear, 600, _profile_speed, "speed")
     # feedback at the DBC cycle times: 10 ms and 100 ms frames over 600 periods of 1 ms
-    assert seen == {0x200: 60, 0x201: 60, 0x202: 6, 0x210: 6, 0x211: 6}
+    assert seen == {0x200: 60, 0x201: 60, 0x202: 6, 0x210: 6, 0x211: 6, 0x212: 6}
     c = bridge.counters
     assert c.rx_total == c.rx_used == 60 and c.timeouts == 0 and c.saturations == 0
-    assert c.tx_frames == 138 and c.periods == 600 and c.steps == 600
+    assert c.tx_frames == 144 and c.periods == 600 and c.steps == 600
 
 
 def test_rack_feedback_matches_with_substeps(channel: str, rack_dbc: RigDbc) -> None:
@@ -104,7 +104,7 @@ def test_rack_feedback_matches_with_substeps(channel: str, rack_dbc: RigDbc) -> 
             lambda k: {"base_speed": 25.0 * math.sin(k / 40.0), "load": 60.0 * math.cos(k / 25.0)},
             "speed",
         )
-        assert seen == {0x300: 60, 0x301: 60, 0x302: 6, 0x310: 6, 0x311: 6}
+        assert seen == {0x300: 60, 0x301: 60, 0x302: 6, 0x310: 6, 0x311: 6, 0x312: 6}
         assert bridge.counters.steps == 1200
     finally:
         peer.close()
@@ -230,7 +230,7 @@ def test_command_timeout_safe_state_and_recovery(link: tuple[Bridge, Peer]) -> N
     bridge, peer = link
     assert bridge.timeout_periods == 50
     bridge.tick()
-    assert bridge.state == {"cmd_timeout": True, "safe_state": True, "drive_disabled": False}
+    assert bridge.state == {"cmd_timeout": True, "safe_state": True, "drive_disabled": False, "fault_active": False}
     assert bridge.counters.timeouts == 0  # no command yet is not a timeout event
     states = {}
     for k in range(1, 400):
@@ -269,7 +269,7 @@ def test_disabled_mode_is_the_safe_state_without_timeout(link: tuple[Bridge, Pee
     assert bridge.inputs["base_speed"] == 8.0
     peer.command(base_speed=8.0, load=0.2, mode="disabled")
     bridge.tick()
-    assert bridge.state == {"cmd_timeout": False, "safe_state": True, "drive_disabled": True}
+    assert bridge.state == {"cmd_timeout": False, "safe_state": True, "drive_disabled": True, "fault_active": False}
     assert bridge.inputs == {"base_speed": 0.0, "base_torque": 0.0, "load": 0.0}
     assert bridge.counters.rx_used == 2 and bridge.counters.rx_rejected == 0
 
@@ -364,7 +364,7 @@ def test_counters_are_the_c_bridges_own(gear: Any, gear_dbc: RigDbc) -> None:
     from gearsim.hil.names import STATUS_COUNTS
 
     assert Counters.NAMES == (*STATUS_COUNTS, "steps")
-    assert STATUS_COUNTS[0] == "rx_total" and STATUS_COUNTS[-1] == "periods"
+    assert STATUS_COUNTS[0] == "rx_total" and STATUS_COUNTS[-1] == "log_dropped"
     bridge = Bridge.from_model(gear, gear_dbc, period=1e-3, substeps=3)
     bridge.advance(250)
     counts = bridge._b.counters.count
@@ -372,5 +372,5 @@ def test_counters_are_the_c_bridges_own(gear: Any, gear_dbc: RigDbc) -> None:
         assert getattr(bridge.counters, name) == counts[i], name
     assert bridge.counters.periods == counts[lib.GS_HIL_COUNT_PERIODS] == 250
     assert bridge.counters.steps == 750
-    # 10 ms frames x 2 over 250 ms, 100 ms frames x 3 at 100 and 200 ms
-    assert bridge.counters.tx_frames == 2 * 25 + 3 * 2
+    # 10 ms frames x 2 over 250 ms, 100 ms frames x 4 at 100 and 200 ms
+    assert bridge.counters.tx_frames == 2 * 25 + 4 * 2

@@ -94,3 +94,46 @@ def test_the_runner_writes_the_direction_field(tmp_path: Path) -> None:
     assert res.returncode == 0, res.stderr
     lines = out.read_text().splitlines()
     assert lines and all(ANSWER.match(line) for line in lines), lines[:3]
+
+
+def _campaign_block() -> str:
+    text = (ROOT / "docs" / "hil.md").read_text()
+    section = text[text.index("## A test campaign") :]
+    block = re.search(r"```sh\n(.*?)```", section, re.S)
+    assert block is not None, "no commands in 'A test campaign'"
+    return block.group(1)
+
+
+@needs_runner
+def test_the_test_campaign_runs_as_written(tmp_path: Path) -> None:
+    """docs/hil.md's worked campaign, command for command, in a scratch
+    directory: the runner (the tests' build in place of build/hil) serves
+    socketcand on a free port, examples/hil/host.py drives it, the verdict has
+    the one failure the doc shows, the recording converts and compares, and
+    the two replays write the same verdict."""
+    import os
+    import socket
+    import subprocess
+    import sys
+
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
+    (tmp_path / "build" / "hil").mkdir(parents=True)
+    (tmp_path / "build" / "hil" / "gearsim-hil").symlink_to(RUNNER)
+    with socket.socket() as s:  # a free port in place of the doc's 29536
+        s.bind(("127.0.0.1", 0))
+        port = str(s.getsockname()[1])
+    script = _campaign_block().replace("29536", port)
+    env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}")
+    res = subprocess.run(
+        ["bash", "-c", script], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120
+    )
+    assert "gearsim-hil exit status 3" in res.stdout, res.stdout + res.stderr
+    verdict = (tmp_path / "verdict.xml").read_text()
+    assert 'tests="4" failures="1"' in verdict
+    assert "never DriveMode == disabled from 2.5 s to 3 s (last: 1)" in verdict
+    overall = re.search(r"^overall\s+([0-9.e-]+)", res.stdout, re.M)
+    assert overall is not None and float(overall.group(1)) <= 1e-3, res.stdout
+    replay_c, replay_py = (tmp_path / "replay-c.xml").read_text(), (tmp_path / "replay-py.xml").read_text()
+    assert replay_c == replay_py and 'failures="1"' in replay_c
+    # the recording starts with the run (--wait-client): its replay is the live run
+    assert replay_c == verdict

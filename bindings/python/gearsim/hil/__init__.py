@@ -60,6 +60,10 @@ _EXPORTS: dict[str, str] = {
     "INPUTS_SINCE": "recording",
     "RecordingError": "recording",
     "COLUMNS": "recording",
+    "Scenario": "scenario",
+    "ScenarioError": "scenario",
+    "tunable_parameters": "names",
+    "FAULTS": "names",
 }
 
 __all__ = list(_EXPORTS)

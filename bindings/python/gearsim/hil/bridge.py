@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import copy
 import math
+import os
 import threading
 import time
 from array import array
@@ -44,6 +45,7 @@ from ..errors import GearsimError
 from ..rig import OUTPUT_NAMES
 from .codec import RigDbc
 from .names import IGNORE_REASONS, LATE_REASONS, REJECT_REASONS, STATE_FLAGS, STATUS_COUNTS
+from .scenario import Scenario, ScenarioError
 
 __all__ = [
     "Bridge",
@@ -75,7 +77,9 @@ class Counters:
     commands had arrived), ``recoveries`` (out of it), ``overruns`` (paced
     run: periods that started more than one period late), ``resyncs`` (paced
     run: the schedule was moved because the loop fell too far behind),
-    ``saturations``, ``periods``; and ``steps``. ``reasons`` breaks
+    ``saturations``, ``periods``, ``faults`` (values and frames an injected
+    fault changed), ``param_changes``, ``param_refused``, ``log_dropped``
+    (the C runner's recording); and ``steps``. ``reasons`` breaks
     rx_rejected, rx_late and rx_ignored down ("rejected.unknown_id": 3, ...);
     ``saturated`` counts clamped values per feedback signal."""
 
@@ -202,6 +206,10 @@ class Bridge:
             wall clock (time.time()), as a bus would stamp it.
         listeners: callables given every frame received and every frame sent
             (e.g. can.Logger for a recording).
+        scenario: a scenario file (docs/hil.md, "Scenarios"): its load
+            profile, faults, parameter changes and expectations, read and run
+            by the C library as the C runner does; junit() gives the verdict.
+            ScenarioError (exit 2) names the file, line and key of a bad one.
     """
 
     def __init__(
@@ -215,6 +223,7 @@ class Bridge:
         timeout: float = 0.1,
         stamp: Callable[[float], float] | None = None,
         listeners: Iterable[Callable[[can.Message], Any]] = (),
+        scenario: str | os.PathLike[str] | None = None,
     ) -> None:
         if not isinstance(substeps, int) or isinstance(substeps, bool) or substeps < 1:
             raise BridgeError(
@@ -248,6 +257,9 @@ class Bridge:
         self._b = self._init_c(float(timeout))
         self.counters = Counters(self._b.counters)
         self._rx = ffi.new("gs_hil_frame *")
+        self.scenario: Scenario | None = None
+        if scenario is not None:
+            self._attach(scenario)
 
     def _init_c(self, timeout: float) -> Any:
         """The C bridge around the rig's C constants and state."""
@@ -267,6 +279,12 @@ class Bridge:
         config.stamp_origin_s = 0.0
         config.send = lib.gspy_hil_send
         config.send_context = self._handle
+        # parameter changes at run time start from the parameters the rig was built with
+        if rig.kind == "simple_gear":
+            config.gear_params = rig.block._c_params
+        else:
+            config.rack_params = rig.block._c_params
+        config.rig_params = rig._c_rig_params
         b = ffi.new("gs_hil_bridge *")
         err = ffi.new("gs_hil_error *")
         if lib.gs_hil_bridge_init(b, config, block, rig._consts, rig._state, err) != lib.GS_HIL_OK:
@@ -363,6 +381,56 @@ class Bridge:
         ffi.memmove(f.data, data, n)
         return ffi.string(lib.gs_hil_reason_name(lib.gs_hil_handle(self._b, f))).decode()
 
+    def request_param(self, name: str, value: float) -> str:
+        """Ask for a rig parameter change ("key", "key[i]" or "key[i][j]" of
+        a tunable parameter; gearsim.hil.names.tunable_parameters) as a
+        parameter frame would: it takes effect one period after the current
+        one (docs/hil.md, "Parameters at run time"). Returns "pending", or
+        the refusal (counted): "unknown_param", "bad_element", "busy", ..."""
+        from .names import PARAM_RESULTS, parse_parameter
+
+        try:
+            index, element = parse_parameter(self.rig.kind, name)
+        except ValueError as exc:
+            raise BridgeError(str(exc), parameter="param") from None
+        result = lib.gs_hil_request_param(self._b, index, element, float(value))
+        return "pending" if result == lib.GS_HIL_PARAM_APPLIED else PARAM_RESULTS[result]
+
+    @property
+    def rig_params(self) -> Any:
+        """The C parameters in use (gs_hil_rig_params: .block.gear or
+        .block.rack, and .rig), after the changes that took effect."""
+        return lib.gs_hil_params(self._b)
+
+    # -- scenario -----------------------------------------------------------------
+    def _attach(self, path: str | os.PathLike[str]) -> None:
+        scenario = Scenario(path, self._table, self.rig.kind)
+        err = ffi.new("gs_hil_error *")
+        if lib.gs_hil_attach_scenario(self._b, scenario._c, err) != lib.GS_HIL_OK:
+            raise ScenarioError(ffi.string(err.message).decode("utf-8", "replace"), parameter="scenario")
+        self.scenario = scenario  # the C bridge points into it: kept alive here
+
+    @property
+    def scenario_end(self) -> int:
+        """The period count at which the scenario has run its duration (0 without one)."""
+        return int(lib.gs_hil_scenario_end(self._b))
+
+    def verdict(self) -> dict[str, int]:
+        """Expectations passed, failed (an open window counts as failed once
+        the bridge is closed) and still pending."""
+        passed, failed, pending = (ffi.new("unsigned *") for _ in range(3))
+        lib.gs_hil_verdict_counts(self._b, passed, failed, pending)
+        return {"passed": int(passed[0]), "failed": int(failed[0]), "pending": int(pending[0])}
+
+    def junit(self) -> str:
+        """The scenario's verdict as JUnit XML (the C library's text: the same
+        bytes as gearsim-hil --junit for the same frames). Call after close()
+        for the final verdict."""
+        n = lib.gs_hil_junit(self._b, ffi.NULL, 0)
+        buf = ffi.new("char[]", n + 1)
+        lib.gs_hil_junit(self._b, buf, n + 1)
+        return ffi.string(buf).decode("utf-8", "replace")
+
     def add_listener(self, listener: Callable[[can.Message], Any]) -> None:
         """Give ``listener`` every frame received and sent from now on."""
         self._listeners.append(listener)
@@ -413,6 +481,11 @@ class Bridge:
         target = int(lib.gs_hil_period_at(self._b, t))
         if target > self.periods:
             self.advance(target - self.periods)
+
+    def period_at(self, t: float) -> int:
+        """The period boundary at which a replay handles a frame t seconds
+        after the log's first (gs_hil_period_at)."""
+        return int(lib.gs_hil_period_at(self._b, t))
 
     def periods_in(self, seconds: float) -> int:
         """Whole frame periods in ``seconds`` (rounded half to even)."""
@@ -484,6 +557,8 @@ class Bridge:
         and is never skipped. Returns the LoopStats (also when stopped)."""
         if self.bus is None:
             raise BridgeError("run() needs a bus")
+        if duration is None and self.scenario is not None:
+            duration = self.scenario.duration  # a scenario runs its duration
         stats = stats if stats is not None else LoopStats(self.period)
         should_stop: Callable[[], bool]
         if stop is None:
@@ -533,6 +608,7 @@ class Bridge:
         (after_stop). Returns summary(). Does not shut the bus down."""
         if not self._closed:
             lib.gs_hil_close(self._b)
+            lib.gs_hil_finish_scenario(self._b)
             self._closed = True
         return self.summary()
 
@@ -545,6 +621,9 @@ class Bridge:
         d["substeps"] = self.substeps
         d["timeout"] = self.timeout
         d["state"] = dict(self.state)
+        if self.scenario is not None:
+            v = self.verdict()
+            d["verdict"] = {"passed": v["passed"], "failed": v["failed"] + v["pending"]}
         return d
 
     def __enter__(self) -> Bridge:

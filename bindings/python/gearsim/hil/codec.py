@@ -87,6 +87,8 @@ _KINDS = {
     lib.GS_HIL_FRAME_COMMAND: "command",
     lib.GS_HIL_FRAME_FEEDBACK: "feedback",
     lib.GS_HIL_FRAME_OTHER: "other",
+    lib.GS_HIL_FRAME_PARAM: "param",
+    lib.GS_HIL_FRAME_ACK: "ack",
 }
 
 
@@ -140,7 +142,9 @@ class FrameSpec:
     is_extended: bool
     length: int
     kind: str
-    """"command", "feedback" or "other" (in the DBC, not used by the bridge)"""
+    """"command", "feedback", "param" (a parameter request from the host),
+    "ack" (its answer from the rig) or "other" (in the DBC, not used by the
+    bridge)"""
     cycle_time: float | None
     """GenMsgCycleTime in seconds, or None"""
     signals: tuple[SignalSpec, ...]
@@ -182,12 +186,12 @@ class _Table:
     as they are, each role resolved by gs_hil_role_parse. Owns the C memory
     (keep it alive as long as the table is used)."""
 
-    def __init__(self, db: Any, block: str | None, fail: Any) -> None:
+    def __init__(self, db: Any, block: str | None, fail: Any, name: str = "dbc") -> None:
         self._keep: list[Any] = []
         messages = db.messages
         self.frames = ffi.new("gs_hil_frame_spec[]", max(1, len(messages)))
         self.dbc = ffi.new("gs_hil_dbc *")
-        self.dbc.name = self._text("dbc")
+        self.dbc.name = self._text(name)  # the file's stem, as the runner's built-in tables
         self.dbc.block = BLOCKS.get(block or "", lib.GS_RIG_SIMPLE_GEAR)
         self.dbc.frames = self.frames
         self.dbc.frame_count = len(messages)
@@ -285,7 +289,7 @@ class RigDbc:
             if dbc_block and dbc_block != block:
                 self._fail(f"is for {dbc_block}, not for {block}")
         self.block: str | None = dbc_block or block
-        self.table = _Table(db, self.block, self._fail)
+        self.table = _Table(db, self.block, self._fail, self.path.stem)
         err = ffi.new("gs_hil_error *")
         if lib.gs_hil_dbc_check(self.table.dbc, err) != lib.GS_HIL_OK:
             self._fail(ffi.string(err.message).decode("utf-8", "replace"))
@@ -305,6 +309,9 @@ class RigDbc:
         self.command_signals: dict[str, tuple[FrameSpec, SignalSpec]] = {
             s.role: (f, s) for f in self.commands.values() for s in f.signals if s.role
         }
+        #: the parameter request and acknowledgement frames (None without)
+        self.param_frame: FrameSpec | None = next((f for f in frames if f.kind == "param"), None)
+        self.ack_frame: FrameSpec | None = next((f for f in frames if f.kind == "ack"), None)
 
     # -- loading ---------------------------------------------------------------
     def _fail(self, message: str) -> None:
@@ -412,6 +419,30 @@ class RigDbc:
                 )
             )
         return msgs
+
+    def encode_param(self, name: str, value: float) -> can.Message:
+        """The parameter frame that asks the rig to set ``name`` ("key",
+        "key[i]" or "key[i][j]" of a tunable parameter of the DBC's rig,
+        gearsim.hil.names.tunable_parameters) to ``value`` (SI units). Encoded
+        by cantools, strict. DbcError without a parameter frame or for a
+        name that is no tunable parameter."""
+        from .names import parse_parameter
+
+        if self.param_frame is None or self.block is None:
+            self._fail("has no parameter frame (GsRole param.id and param.value)")
+        assert self.param_frame is not None and self.block is not None
+        try:
+            index, element = parse_parameter(self.block, name)
+        except ValueError as exc:
+            raise DbcError(str(exc), parameter="param") from None
+        values = {"param.id": index, "param.element": element, "param.value": float(value)}
+        data = {s.name: values.get(s.role or "", 0) for s in self.param_frame.signals}
+        payload = self.param_frame.message.encode(data, scaling=True, strict=True)
+        return can.Message(
+            arbitration_id=self.param_frame.frame_id,
+            is_extended_id=self.param_frame.is_extended,
+            data=payload,
+        )
 
     @staticmethod
     def _mode_raw(s: SignalSpec, mode: str) -> int:

@@ -23,6 +23,10 @@ __all__ = [
     "REJECT_REASONS",
     "LATE_REASONS",
     "IGNORE_REASONS",
+    "FAULTS",
+    "PARAM_RESULTS",
+    "tunable_parameters",
+    "parse_parameter",
 ]
 
 
@@ -58,3 +62,31 @@ def _of_class(cls: str) -> tuple[str, ...]:
 REJECT_REASONS = _of_class("rejected")
 LATE_REASONS = _of_class("late")
 IGNORE_REASONS = _of_class("ignored")
+
+#: Fault kinds a scenario's fault steps name, in C order.
+FAULTS: tuple[str, ...] = _names(lib.gs_hil_fault_name, lib.GS_HIL_FAULTS)
+#: The ack.result values of a parameter request, in C order (0 = applied).
+PARAM_RESULTS: tuple[str, ...] = _names(lib.gs_hil_param_result_name, lib.GS_HIL_PARAM_RESULTS)
+
+_BLOCK_CODES = {"simple_gear": lib.GS_RIG_SIMPLE_GEAR, "rack_pinion": lib.GS_RIG_RACK_PINION}
+
+
+def tunable_parameters(block: str) -> tuple[str, ...]:
+    """The keys of the parameters a running rig of ``block`` ("simple_gear"
+    or "rack_pinion") may change, by their index (a parameter frame's
+    param.id): the TUNABLE entries of the C parameter tables."""
+    code = _BLOCK_CODES[block]
+    n = lib.gs_hil_param_count(code)
+    return tuple(ffi.string(lib.gs_hil_param_key(code, i)).decode("ascii") for i in range(n))
+
+
+def parse_parameter(block: str, name: str) -> tuple[int, int]:
+    """(index, element) of "key", "key[i]" or "key[i][j]"; ValueError when
+    no tunable parameter of the rig has that name or element."""
+    index, element = ffi.new("unsigned *"), ffi.new("unsigned *")
+    if lib.gs_hil_param_parse(_BLOCK_CODES[block], name.encode(), index, element) != 0:
+        raise ValueError(
+            f"{name!r} is no tunable parameter of the {block} rig (key, key[i] or key[i][j] of: "
+            f"{' '.join(tunable_parameters(block))})"
+        )
+    return int(index[0]), int(element[0])

@@ -51,7 +51,7 @@ from can.io.generic import (
     TextIOMessageWriter,
 )
 
-from .._outputs import check_output, file_mode, printable
+from .._outputs import atomic_write_text, check_output, file_mode, printable
 from ..errors import InputError
 from .bridge import CHUNK_STEPS, Bridge
 from .codec import RigDbc
@@ -329,6 +329,8 @@ class ReplayResult:
     frames_out: int
     wall_time: float
     """seconds the replay took"""
+    junit: str | None = None
+    """the scenario's verdict as JUnit XML (None without a scenario)"""
 
     @property
     def frames_per_second(self) -> float:
@@ -373,16 +375,22 @@ def replay_messages(
     _check_tail(tail)
     check = TimeCheck(max_gap, name)
     n = 0
+    end = bridge.scenario_end
     for msg in messages:
         ts = check(msg.timestamp)
         if origin is None:
             origin = ts
+        if end and bridge.period_at(ts - origin) > end:
+            break  # after the scenario's end: the run it describes is over
         bridge.advance_to(ts - origin)
         if on_input is not None:
             on_input(msg)
         bridge.handle(msg)
         n += 1
-    bridge.advance(1 + bridge.periods_in(tail))
+    if not end:
+        bridge.advance(1 + bridge.periods_in(tail))  # the last command acts, then the tail
+    elif end > bridge.periods:
+        bridge.advance(end - bridge.periods)  # a scenario: its duration, as a live run
     return n
 
 
@@ -416,6 +424,8 @@ def replay(
     on_answer: Callable[[can.Message], Any] | None = None,
     max_gap: float | None = DEFAULT_MAX_GAP,
     require_used: bool = False,
+    scenario: str | PathLike[str] | None = None,
+    junit: str | PathLike[str] | None = None,
 ) -> ReplayResult:
     """Replay ``log`` through a fresh rig of ``model`` (a gearsim.Model) and
     write the answers to ``out`` (python-can Logger; format from the suffix)
@@ -429,10 +439,15 @@ def replay(
     python-can writes) and is written atomically: on any failure the previous
     file (or none) is left in place. ``max_gap``: see :func:`replay_messages`.
     ``require_used``: raise a LogError (and write nothing) when no frame of
-    the log was a command the model used (a log of another rig, ...)."""
+    the log was a command the model used (a log of another rig, ...).
+    ``scenario``: a scenario file run on the replay (the C runner's rule:
+    the replay goes on to the scenario's end); ``junit``: where its verdict
+    goes (atomically), which is then also ``ReplayResult.junit``."""
     if out is not None:
-        check_output(out, [log, dbc if not isinstance(dbc, RigDbc) else None], option="--out")
+        check_output(out, [log, dbc if not isinstance(dbc, RigDbc) else None, scenario], option="--out")
         log_writer_format(out)
+    if junit is not None:
+        check_output(junit, [log, scenario, out], option="--junit")
     TimeCheck(max_gap)  # validates max_gap before any work
     _check_tail(tail)
     reader = read_log(log)
@@ -463,6 +478,7 @@ def replay(
             timeout=timeout,
             send=answer,
             stamp=lambda t: (origin[0] if origin else 0.0) + t,
+            scenario=scenario,
         )
         writer = AtomicLogWriter(out) if out is not None else None
         on_input = writer.on_message_received if (with_input and writer is not None) else None
@@ -475,6 +491,9 @@ def replay(
             raise LogError(_nothing_used(reader.name, n, summary, bridge))
         if writer is not None:
             writer.commit()
+        verdict = bridge.junit() if bridge.scenario is not None else None
+        if junit is not None and verdict is not None:
+            atomic_write_text(junit, verdict)
         wall = time.perf_counter() - start
     except BaseException:
         if writer is not None:
@@ -482,4 +501,4 @@ def replay(
         raise
     finally:
         reader.stop()
-    return ReplayResult(summary, n, frames_out, wall)
+    return ReplayResult(summary, n, frames_out, wall, verdict)

@@ -237,6 +237,7 @@ def live_command(
     rx: str = "-",
     tx: str = "-",
     channel: str = "can0",
+    listen: str = "127.0.0.1:29536",
     duration: float | None = None,
     spin_us: int | None = None,
     fifo: int | None = None,
@@ -250,6 +251,8 @@ def live_command(
     cmd += ["--transport", transport]
     if transport == "socketcan":
         cmd += ["--channel", channel]
+    elif transport == "socketcand":
+        cmd += ["--listen", listen, "--channel", channel]
     else:
         cmd += ["--rx", rx, "--tx", tx]
     if duration is not None:

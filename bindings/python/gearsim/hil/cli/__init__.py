@@ -14,7 +14,7 @@ Hooked into the ``gearsim`` command by gearsim/cli.py through
 
 Exit status: 0 success, 2 bad input (one line on standard error, no
 traceback), 1 internal failure (one line; the traceback only with
-GEARSIM_DEBUG set), 130 interrupted, 141 when standard output is a pipe
+GEARSIM_DEBUG set), 3 a scenario expectation failed (run, replay), 130 interrupted, 141 when standard output is a pipe
 closed by its reader (``... -o - | head``; nothing printed). Without the hil
 extra (python-can, cantools) every command exits with status 2 and one line
 naming it: ``pip install 'gearsim[hil]'``. ``--json`` prints exactly one JSON
@@ -80,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def run_args(args: argparse.Namespace) -> int:
-    """Run the parsed ``hil`` command; returns the exit status (0, 1, 2, 130
+    """Run the parsed ``hil`` command; returns the exit status (0, 1, 2, 3, 130
     or 141). Nothing escapes as a traceback unless GEARSIM_DEBUG is set."""
     prog = f"gearsim hil {args.hil_command}"
     _quiet_python_can()

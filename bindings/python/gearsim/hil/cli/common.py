@@ -71,6 +71,40 @@ def model_options(p: argparse.ArgumentParser) -> None:
     json_option(p)
 
 
+#: Exit status of a run or replay whose scenario failed an expectation (the
+#: C runner's too): the run itself went through; its verdict says no.
+EXIT_VERDICT_FAILED = 3
+
+
+def scenario_options(p: argparse.ArgumentParser) -> None:
+    """--scenario and --junit: a test campaign on the run (docs/hil.md, "Scenarios")."""
+    p.add_argument(
+        "--scenario",
+        metavar="S.toml",
+        help="scenario file: load profile, faults, parameter changes and expectations "
+        "(docs/hil.md, Scenarios); a run lasts its duration; exit status 3 when an "
+        "expectation fails",
+    )
+    p.add_argument(
+        "--junit",
+        metavar="VERDICT.xml",
+        help="write the scenario's verdict as JUnit XML (one test case per expectation)",
+    )
+
+
+def check_scenario_options(args: argparse.Namespace) -> None:
+    if getattr(args, "junit", None) is not None and getattr(args, "scenario", None) is None:
+        raise HilInputError("--junit needs --scenario (the verdict is the scenario's)")
+    if args.scenario is not None and not Path(args.scenario).is_file():
+        raise HilInputError(f"{show(args.scenario)}: no such scenario file")
+
+
+def verdict_status(summary: dict[str, Any]) -> int:
+    """0, or EXIT_VERDICT_FAILED when the summary's verdict has failures."""
+    verdict = summary.get("verdict")
+    return EXIT_VERDICT_FAILED if verdict and verdict.get("failed") else 0
+
+
 def json_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object on standard output")
 
@@ -156,4 +190,7 @@ def counter_lines(summary: dict[str, Any]) -> list[str]:
         lines.append(f"  saturated {printable(k):<28} {v}")
     state = summary.get("state", {})
     lines.append("state            " + ", ".join(f"{k}={int(bool(v))}" for k, v in state.items()))
+    verdict = summary.get("verdict")
+    if verdict is not None:
+        lines.append(f"verdict          {verdict['passed']} passed, {verdict['failed']} failed")
     return lines

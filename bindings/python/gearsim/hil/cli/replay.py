@@ -11,6 +11,7 @@ from typing import Any
 from ..._outputs import check_output
 from .common import (
     HilInputError,
+    check_scenario_options,
     check_timing,
     counter_lines,
     dbc_for,
@@ -20,7 +21,9 @@ from .common import (
     load_model,
     max_gap,
     model_options,
+    scenario_options,
     show,
+    verdict_status,
 )
 
 NAME = "replay"
@@ -48,12 +51,14 @@ def add_parser(sub: Any) -> None:
     )
     p.add_argument("--with-input", action="store_true", help="also write the log's frames to --out")
     gap_option(p)
+    scenario_options(p)
 
 
 def execute(args: argparse.Namespace) -> int:
     from ..replay import log_writer_format, replay
 
     check_timing(args)
+    check_scenario_options(args)
     if not (math.isfinite(args.tail) and args.tail >= 0):
         raise HilInputError(f"--tail must be a time >= 0 s, got {args.tail!r}")
     gap = max_gap(args)
@@ -78,6 +83,8 @@ def execute(args: argparse.Namespace) -> int:
         with_input=args.with_input,
         max_gap=gap,
         require_used=True,
+        scenario=args.scenario,
+        junit=args.junit,
     )
     lines = [
         f"replayed {result.frames_in} frames, answered {result.frames_out} frames in "
@@ -85,6 +92,8 @@ def execute(args: argparse.Namespace) -> int:
     ]
     if args.out:
         lines.append(f"answers written to {show(args.out)}")
+    if args.junit:
+        lines.append(f"verdict written to {show(args.junit)}")
     lines += counter_lines(result.summary)
     emit(args, result.as_dict(), lines)
-    return 0
+    return verdict_status(result.summary)

@@ -20,6 +20,7 @@ from ..._outputs import check_output, one_line, printable, say
 from . import run_c
 from .common import (
     HilInputError,
+    check_scenario_options,
     check_timing,
     counter_lines,
     dbc_for,
@@ -27,6 +28,8 @@ from .common import (
     inputs,
     load_model,
     model_options,
+    scenario_options,
+    verdict_status,
 )
 
 NAME = "run"
@@ -129,6 +132,7 @@ def add_parser(sub: Any) -> None:
     run_c.runner_options(p)
     model_options(p)
     _session_options(p)
+    scenario_options(p)
 
 
 # -- the bus ------------------------------------------------------------------------
@@ -191,6 +195,7 @@ def open_bus(config: dict[str, Any]) -> Any:
 # -- the run --------------------------------------------------------------------------
 def _check_options(args: argparse.Namespace) -> None:
     check_timing(args)
+    check_scenario_options(args)
     if args.duration is not None and not args.duration >= 0:
         raise HilInputError(f"--duration must be >= 0 s, got {args.duration!r}")
     if not args.max_lag > 0:
@@ -208,15 +213,21 @@ def execute(args: argparse.Namespace) -> int:
     if args.log is not None:
         from ..replay import log_writer_format
 
-        check_output(args.log, inputs(args, "model", "dbc", "can_config"), option="--log")
+        check_output(args.log, inputs(args, "model", "dbc", "can_config", "scenario"), option="--log")
         log_writer_format(args.log, option="--log")
+    if args.junit is not None:
+        check_output(args.junit, inputs(args, "model", "dbc", "can_config", "scenario", "log"), option="--junit")
     model = load_model(args.model)
     dbc = dbc_for(args, model.block)
     config = bus_config(args)
     if config.get("interface") == "virtual":
         say(f"gearsim hil run: warning: {VIRTUAL_WARNING}")
     bus = open_bus(config)
-    summary, stats = _serve(args, model, dbc, bus, where(config))
+    summary, stats, verdict = _serve(args, model, dbc, bus, where(config))
+    if args.junit is not None and verdict is not None:
+        from ..._outputs import atomic_write_text
+
+        atomic_write_text(args.junit, verdict)
     timing = stats.summary()
     summary["loop"] = timing
     lines = counter_lines(summary)
@@ -231,13 +242,16 @@ def execute(args: argparse.Namespace) -> int:
             f"p99 {timing['lateness_p99_us']:.1f} us, max {timing['lateness_max_us']:.1f} us"
         )
     emit(args, summary, lines)
-    return 0
+    return verdict_status(summary)
 
 
-def _serve(args: argparse.Namespace, model: Any, dbc: Any, bus: Any, on: str) -> tuple[dict, Any]:
+def _serve(
+    args: argparse.Namespace, model: Any, dbc: Any, bus: Any, on: str
+) -> tuple[dict, Any, str | None]:
     """The paced session on an open bus (shut down at the end): returns the
-    bridge's summary and the loop timing. SIGINT and SIGTERM stop it at the
-    next period; --log keeps its recording when the session ends normally."""
+    bridge's summary, the loop timing and the scenario's verdict (JUnit XML,
+    None without a scenario). SIGINT and SIGTERM stop it at the next period;
+    --log keeps its recording when the session ends normally."""
     from ..bridge import Bridge, RigTimeRecorder
     from ..replay import AtomicLogWriter
 
@@ -247,7 +261,13 @@ def _serve(args: argparse.Namespace, model: Any, dbc: Any, bus: Any, on: str) ->
     done = False
     try:
         bridge = Bridge.from_model(
-            model, dbc, period=args.period, substeps=args.substeps, timeout=args.timeout, bus=bus
+            model,
+            dbc,
+            period=args.period,
+            substeps=args.substeps,
+            timeout=args.timeout,
+            bus=bus,
+            scenario=args.scenario,
         )
         if args.log is not None:
             logger = AtomicLogWriter(args.log, option="--log")
@@ -273,6 +293,7 @@ def _serve(args: argparse.Namespace, model: Any, dbc: Any, bus: Any, on: str) ->
             duration=args.duration, stop=stop, spin=max(0.0, args.spin), max_lag=args.max_lag
         )
         summary = bridge.close()
+        verdict = bridge.junit() if bridge.scenario is not None else None
         done = True
     finally:
         for sig, handler in previous.items():
@@ -285,4 +306,4 @@ def _serve(args: argparse.Namespace, model: Any, dbc: Any, bus: Any, on: str) ->
                 logger.abort()
         finally:
             bus.shutdown()
-    return summary, stats
+    return summary, stats, verdict

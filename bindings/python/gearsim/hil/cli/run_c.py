@@ -40,6 +40,13 @@ def runner_options(p: argparse.ArgumentParser) -> None:
         "line instead of running it",
     )
     p.add_argument(
+        "--listen",
+        metavar="HOST:PORT",
+        default="127.0.0.1:29536",
+        help="with --runner c -i socketcand: where the runner's socketcand server listens "
+        "(default 127.0.0.1:29536)",
+    )
+    p.add_argument(
         "--runner-params",
         metavar="FILE",
         help="with --runner c: where to write the runner's parameter file "
@@ -55,6 +62,8 @@ def _transport(args: argparse.Namespace) -> dict[str, Any]:
 
     if args.interface == "candump":
         return {"transport": "candump"}
+    if args.interface == "socketcand":
+        return {"transport": "socketcand", "channel": args.channel or "can0", "listen": args.listen}
     config = bus_config(args)
     if config.get("interface") != "socketcan":
         raise HilInputError(
@@ -67,6 +76,11 @@ def _transport(args: argparse.Namespace) -> dict[str, Any]:
 
 def _command(runner: Any, path: Path, params: str, args: argparse.Namespace) -> list[str]:
     """The runner's command line for this run (gearsim.hil.runner.live_command)."""
+    campaign = []
+    for option in ("scenario", "junit", "log"):
+        value = getattr(args, option, None)
+        if value is not None:
+            campaign += [f"--{option}", os.fspath(value)]
     cmd = runner.live_command(
         params,
         period=args.period,
@@ -78,7 +92,7 @@ def _command(runner: Any, path: Path, params: str, args: argparse.Namespace) -> 
         runner=path,
         **_transport(args),
     )
-    return [str(part) for part in cmd]
+    return [str(part) for part in cmd] + campaign
 
 
 def _choose(runner: Any, explicit: str | None) -> tuple[Path, str]:
@@ -99,8 +113,14 @@ def _choose(runner: Any, explicit: str | None) -> tuple[Path, str]:
 def execute(args: argparse.Namespace) -> int:
     from .. import runner
 
-    if args.log is not None or args.dbc is not None:
-        raise HilInputError("--log and --dbc are options of the Python bridge (--runner python)")
+    if args.dbc is not None:
+        raise HilInputError("--dbc is an option of the Python bridge (--runner python)")
+    if args.log is not None and not args.log.lower().endswith(".log"):
+        raise HilInputError(f"--log {show(args.log)}: the C runner records candump .log files")
+    if args.log is not None:
+        check_output(args.log, inputs(args, "model", "can_config", "scenario"), option="--log")
+    if args.junit is not None:
+        check_output(args.junit, inputs(args, "model", "can_config", "scenario", "log"), option="--junit")
     path, which = _choose(runner, args.runner_path)
     model = load_model(args.model)
     if args.print_command:
