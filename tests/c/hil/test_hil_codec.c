@@ -84,7 +84,7 @@ static void test_encode_saturates_and_rounds(void **unused)
     assert_int_equal(data[2], 0x7F);
     assert_float_equal(gs_hil_signal_value(torque, data), 838.8607, 1e-9);
     /* NaN: the value in range nearest 0 */
-    assert_int_equal(gs_hil_put_value(torque, NAN, data), 1);
+    assert_int_equal(gs_hil_put_value(torque, (double)NAN, data), 1);
     assert_int_equal(data[0] | data[1] | data[2], 0);
 }
 
