@@ -138,9 +138,9 @@ GS_API extern const gs_field_info gs_rig_state_info[GS_RIG_STATE_FIELDS];
  * part of the ABI (GS_RIG_CONSTS_REALS reals; on targets that pack enums the
  * internal layout uses a few bytes less). */
 #ifdef GS_SINGLE_PRECISION
-#define GS_RIG_CONSTS_REALS 211
+#define GS_RIG_CONSTS_REALS 249
 #else
-#define GS_RIG_CONSTS_REALS 203
+#define GS_RIG_CONSTS_REALS 241
 #endif
 typedef struct {
     gs_real opaque_[GS_RIG_CONSTS_REALS];
