@@ -37,12 +37,14 @@
  * limit L2, docs/hardening.md) are stepped but not checked, and counted.
  * The search prints what it covered.
  */
+#include <stdlib.h>
+
 #include "test_common.h"
 
-#define RIGS 4000
+#define RIGS 20000
 #define STEPS 120
 #define SEED 0x5EA2C11ULL
-#define ROUNDING 256.0
+#define ROUNDING 1024.0
 
 #ifdef GS_SINGLE_PRECISION
 #define PRECISION "float"
@@ -184,7 +186,9 @@ static void draw_case(test_rng *r, rig_case *c, coverage *cov)
         gs_simple_gear_params *g = &c->g;
         double k_max;
         *g = gs_simple_gear_params_default();
-        g->teeth_ratio = R(log_range(r, 0.01, 100.0));
+        /* a tenth of the gears at the extremes of the ratio (1e-3..1e3): the
+         * float conditioning limit of docs/hardening.md (L2) */
+        g->teeth_ratio = R(chance(r, 0.1) ? log_range(r, 1e-3, 1e3) : log_range(r, 0.01, 100.0));
         g->output_shaft_rotates = chance(r, 0.5) ? GS_ROTATES_SAME : GS_ROTATES_OPPOSITE;
         g->friction_model = (gs_friction_model)(rng_next(r) % 5U);
         g->loss_smoothing = c->smoothing;
@@ -303,29 +307,47 @@ static double ripple_at(const rig_case *c, double theta)
     return t;
 }
 
-/* kappa = c*(K*h + D) of the contact (physics.md 11), c = h/m_eff. */
-static double contact_kappa(const rig_case *c, const gs_rig_info *info)
+/* The contact's pitch-line quantities (physics.md 4 and 11): radii, the
+ * sub-step h, 1/m_eff with the viscous terms implicit, c = h/m_eff and
+ * kappa = c*(K*h + D), the conditioning of the backward-Euler contact. */
+typedef struct {
+    double r_b, r_f, h, inv_m, c, kappa;
+} contact_geom;
+
+static contact_geom contact_of(const rig_case *c, const gs_rig_info *info)
 {
-    const double h = (double)c->rp.dt_s / info->contact_substeps;
-    double r_b, r_f, mu_b, mu_f, inv_m;
+    contact_geom g;
+    double mu_b, mu_f;
+    memset(&g, 0, sizeof g);
     if (c->mesh != MESH_BACKLASH)
-        return 0.0;
+        return g;
+    g.h = (double)c->rp.dt_s / info->contact_substeps;
     if (c->gear) {
-        r_b = (double)c->g.backlash.base_radius_m;
-        r_f = (double)c->g.teeth_ratio * r_b;
+        g.r_b = (double)c->g.backlash.base_radius_m;
+        g.r_f = (double)c->g.teeth_ratio * g.r_b;
         mu_b = (double)c->g.viscous_coefficients[0];
         mu_f = (double)c->g.viscous_coefficients[1];
     } else {
-        r_b = (double)gs_rack_pinion_radius(&c->k);
-        r_f = 1.0;
+        g.r_b = (double)gs_rack_pinion_radius(&c->k);
+        g.r_f = 1.0;
         mu_b = (double)c->k.pinion_viscous_coefficient;
         mu_f = (double)c->k.rack_viscous_coefficient;
     }
-    inv_m = r_f * r_f / ((double)c->rp.driven_inertia + h * mu_f);
+    g.inv_m = g.r_f * g.r_f / ((double)c->rp.driven_inertia + g.h * mu_f);
     if (c->rp.base_drive == GS_BASE_TORQUE_DRIVEN)
-        inv_m += r_b * r_b / ((double)c->rp.base_inertia_kg_m2 + h * mu_b);
-    return h * inv_m * ((double)c->bl.stiffness_N_m * h + (double)c->bl.damping_N_s_m);
+        g.inv_m += g.r_b * g.r_b / ((double)c->rp.base_inertia_kg_m2 + g.h * mu_b);
+    g.c = g.h * g.inv_m;
+    g.kappa = g.c * ((double)c->bl.stiffness_N_m * g.h + (double)c->bl.damping_N_s_m);
+    return g;
 }
+
+/* The contact solve's own accuracy (docs/model.md): its Newton stops at
+ * 1e-13 (float 1e-6) of the pitch-line speed scale; ten times that. */
+#ifdef GS_SINGLE_PRECISION
+#define SOLVER_TOLERANCE 1e-5
+#else
+#define SOLVER_TOLERANCE 1e-12
+#endif
 
 static void report_case(const rig_case *c, int rig, int step, const char *what, double created, double tol)
 {
@@ -356,7 +378,7 @@ static int judge(coverage *cov, const rig_case *c, int rig, int step, const char
     if (margin > cov->worst)
         cov->worst = margin;
     if (created > tol) {
-        if (cov->failed_rigs < 8)
+        if (cov->failed_rigs < (getenv("PASSIVITY_VERBOSE") ? 100000 : 8))
             report_case(c, rig, step, what, created, tol);
         return 1;
     }
@@ -376,13 +398,15 @@ static int run_case(const rig_case *c, int index, test_rng *r, coverage *cov)
     const double k_s = (double)c->rp.compliance_stiffness_Nm_rad;
     const int torque = c->rp.base_drive == GS_BASE_TORQUE_DRIVEN;
     double w_b, w_f, theta, x_f, energy_c, twist, w_in_last = 0.0;
+    contact_geom geom;
     int failures = 0, k, checked;
     if (c->gear)
         INIT_GEAR_RIG(&rig, &c->g, &c->rp);
     else
         INIT_RACK_RIG(&rig, &c->k, &c->rp);
     gs_rig_get_info(&rig.c, &info);
-    checked = !(contact_kappa(c, &info) * eps > 1e-4);
+    geom = contact_of(c, &info);
+    checked = !(geom.kappa * eps > 1e-4);
     if (!checked)
         ++cov->skipped_conditioning;
     w_b = (double)rig.s.base_speed;
@@ -394,7 +418,7 @@ static int run_case(const rig_case *c, int index, test_rng *r, coverage *cov)
     for (k = 0; k < STEPS; ++k) {
         gs_rig_input in = rig_input_blank();
         const int started = rig.s.started;
-        double push, ke0, ke1, mag, quant, created, tol, w_in;
+        double push, ke0, ke1, mag, quant, created, tol, w_in, rounding = 0.0;
         walk_next(r, &w, torque ? c->torque_scale : c->speed_scale, c->load_scale);
         if (torque)
             in.base_torque = R(w.base);
@@ -409,23 +433,42 @@ static int run_case(const rig_case *c, int index, test_rng *r, coverage *cov)
         assert_true(rig_output_finite(&o));
         push = (double)in.load + (double)c->rp.load_offset;
         if (checked) {
-            const double p_scale = fabs((double)o.base_port_torque * (double)o.base_speed) +
-                                   fabs((double)o.follower_port_torque * (double)o.follower_speed) +
-                                   fabs((double)o.loss_power) + fabs((double)o.port_power);
+            const double wb = fabs((double)o.base_speed), wf = fabs((double)o.follower_speed);
+            const double f_abs = fabs((double)o.contact_force);
             const double e1 = (double)o.contact_energy;
-            const double stored_tol = ROUNDING * eps * (dt * p_scale + energy_c + e1) + 1e-300;
+            const double p_scale = fabs((double)o.base_port_torque) * wb + fabs((double)o.follower_port_torque) * wf +
+                                   fabs((double)o.loss_power) + fabs((double)o.port_power) +
+                                   f_abs * (geom.r_b * wb + geom.r_f * wf);
             const int lossless_check = !(c->mesh == MESH_RIGID && !torque && c->smoothing == GS_SMOOTHING_SIMSCAPE);
+            rounding = ROUNDING * eps * (dt * p_scale + energy_c + e1) + 1e-300;
+            if (c->mesh == MESH_BACKLASH) {
+                /* The rounding a contact carries (docs/hardening.md, fuzz_rig):
+                 * the sub-step impulses of a light side, whose free speeds are
+                 * far larger than the step's, times the force; the absolute
+                 * backlash position, which loses a sub-step's motion below
+                 * ulp(x); and the solve's own tolerance, which the force
+                 * carries as (1 + kappa)/c times the speed scale. */
+                const double f_max = fmax((double)c->rp.load_coulomb_friction, (double)c->rp.load_breakaway_friction);
+                const double f_ext = (fabs((double)in.load) + fabs((double)c->rp.load_offset) + f_max) / geom.r_f +
+                                     (torque ? (fabs((double)in.base_torque) + c->ripple_stiffness) / geom.r_b : 0.0);
+                const double impulse = (f_abs + f_ext) * (f_abs + f_ext) * geom.h * geom.inv_m;
+                const double f_spring = sqrt(2.0 * (double)c->bl.stiffness_N_m * fmax(energy_c, e1));
+                const double v_scale = geom.r_b * wb + geom.r_f * wf + geom.h * f_abs * geom.inv_m;
+                rounding += ROUNDING * eps * impulse * dt +
+                            4.0 * (f_abs + f_spring) * eps *
+                                (fabs((double)o.backlash_position) + 0.5 * (double)c->bl.linear_backlash_m) *
+                                info.contact_substeps +
+                            4.0 * f_spring * eps * (geom.r_b * wb + geom.r_f * wf) * dt +
+                            SOLVER_TOLERANCE * (1.0 + geom.kappa) / geom.c * v_scale * v_scale * dt;
+            }
             if (lossless_check)
-                failures += judge(cov, c, index, k, "negative loss_power", -(double)o.loss_power * dt, stored_tol);
+                failures += judge(cov, c, index, k, "negative loss_power", -(double)o.loss_power * dt, rounding);
             if (c->mesh == MESH_RIGID)
                 failures += judge(cov, c, index, k, "port_power != loss_power",
-                                  fabs((double)o.port_power - (double)o.loss_power) * dt, stored_tol);
+                                  fabs((double)o.port_power - (double)o.loss_power) * dt, rounding);
             if (c->mesh == MESH_BACKLASH)
                 failures += judge(cov, c, index, k, "block balance",
-                                  ((double)o.loss_power - (double)o.port_power) * dt + e1 - energy_c,
-                                  stored_tol + 8.0 * eps * (double)c->bl.stiffness_N_m * 0.5 *
-                                                   (double)c->bl.linear_backlash_m *
-                                                   (fabs((double)o.backlash_position) + 1e-300) * info.contact_substeps);
+                                  ((double)o.loss_power - (double)o.port_power) * dt + e1 - energy_c, rounding);
             ++cov->checked_balance;
         }
         /* the exact external work */
@@ -469,10 +512,7 @@ static int run_case(const rig_case *c, int index, test_rng *r, coverage *cov)
                       (torque ? fabs((double)in.base_torque * d_theta) : fabs(work - push * d_x)) +
                       dt * (fabs((double)o.loss_power) + fabs((double)o.port_power));
                 created = (ke1 - ke0) + (e_stored1 - e_stored0) - work;
-                tol = ROUNDING * eps * mag + quant +
-                      8.0 * eps * (double)c->bl.stiffness_N_m * 0.5 * (double)c->bl.linear_backlash_m *
-                          fabs((double)o.backlash_position) * info.contact_substeps +
-                      1e-300;
+                tol = ROUNDING * eps * mag + quant + rounding;
                 failures += judge(cov, c, index, k, "external work balance", created, tol);
                 ++cov->checked_exact;
             }
@@ -538,8 +578,8 @@ static void test_random_rigs_create_no_energy(void **state)
     assert_int_equal(failed_rigs, 0);
     /* the search reaches what it claims to */
     assert_true(cov.checked_exact > cov.steps / 3);
-    assert_true(cov.mesh[1] > 100 && cov.mesh[2] > 1000);
-    assert_true(cov.no_pull[0] > 300 && cov.lock[1] > 300 && cov.substeps[6] > 100);
+    assert_true(cov.mesh[1] > 1000 && cov.mesh[2] > 5000);
+    assert_true(cov.no_pull[0] > 2000 && cov.lock[1] > 2000 && cov.substeps[6] > 500);
 }
 
 int main(void)
