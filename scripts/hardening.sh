@@ -217,6 +217,8 @@ EOF
 # exists there only, so the rule stays checked everywhere else.
 cat >"$out/cppcheck-file-deviations.txt" <<'EOF'
 include/gearsim/fields.h misra-c2012-20.7
+include/gearsim/parameters.h misra-c2012-20.7
+src/param_info.c misra-c2012-20.7
 include/gearsim/rig.h misra-c2012-2.4
 src/mesh.h misra-c2012-19.2
 src/simple_gear.c misra-c2012-11.5

@@ -85,12 +85,32 @@ typedef struct {
     int law_force_conditioned;   /* kappa < 1: the law may give the root's force */
 } gs_contact_step_;
 
-/* The public opaque blocks are views of these internal types: a compile-time
- * check that the published sizes hold them (C99: a negative array size). The
- * published sizes are those of the x86-64 and AAPCS hosts; where enums are
- * packed into one byte (arm-none-eabi) the internal type is a few bytes
- * smaller. */
+/* A compile-time check (C99: a negative array size). */
 #define GS_STATIC_ASSERT_(name, cond) typedef char gs_static_assert_##name[(cond) ? 1 : -1]
+
+/* The public opaque constants (gs_rig_consts, gs_*_consts) are views of
+ * internal types, published as a count of reals (GS_RIG_CONSTS_REALS,
+ * GS_BLOCK_CONSTS_REALS) because the layout is private. The check below keeps
+ * the published count exact, so that it cannot go stale unnoticed when the
+ * internal layout changes. Where enums are int-sized and reals aligned to
+ * their size (the hosts: x86-64, AArch64, ...) a count that differs from what
+ * the internal type needs fails to compile with "conflicting types for
+ * 'gs_set_<MACRO>_to'"; the type the compiler reports for the second
+ * declaration, char[N] ("have" in GCC's message, the first type in clang's),
+ * gives the value N to write in the header. Where enums are packed into one
+ * byte (arm-none-eabi) the internal type is a few bytes smaller: there the
+ * published count must hold it. */
+#define GS_REALS_FOR_(bytes) (((bytes) + sizeof(gs_real) - 1u) / sizeof(gs_real))
+typedef struct {
+    char c;
+    gs_real x;
+} gs_real_alignment_probe_;
+#define GS_EXACT_CONSTS_ABI_ \
+    (sizeof(gs_friction_model) == sizeof(int) && sizeof(gs_real_alignment_probe_) == 2u * sizeof(gs_real))
+#define GS_CONSTS_REALS_CHECK_(macro, internal)                                                      \
+    GS_STATIC_ASSERT_(macro##_holds_internal, (size_t)(macro) * sizeof(gs_real) >= sizeof(internal)); \
+    extern char gs_set_##macro##_to[macro];                                                           \
+    extern char gs_set_##macro##_to[GS_EXACT_CONSTS_ABI_ ? GS_REALS_FOR_(sizeof(internal)) : (size_t)(macro)]
 
 /* Mesh-loss quantities that depend only on the temperature, evaluated once
  * per step. */

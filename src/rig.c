@@ -97,7 +97,7 @@ typedef struct {
     gs_real ripple_mesh_sin[GS_RIPPLE_HARMONICS];
 } rig_consts_;
 
-GS_STATIC_ASSERT_(rig_consts_size, sizeof(gs_rig_consts) >= sizeof(rig_consts_));
+GS_CONSTS_REALS_CHECK_(GS_RIG_CONSTS_REALS, rig_consts_);
 
 /* The opaque public constants are a view of rig_consts_. */
 static const rig_consts_ *consts_of(const gs_rig_consts *consts)
