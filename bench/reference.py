@@ -20,6 +20,14 @@ What it models (both blocks, every friction model, backlash always on):
   after the loss, so ``T_F = T_F0 + tau_mesh(T_F)`` is *solved numerically*
   (``scipy.optimize.brentq`` on a bracket that holds the root) at every
   evaluation of the right-hand side. No closed form of the C core is used.
+  As in the rigs (section 11, "Lossy meshes hold") the loss is a friction
+  element on the follower: while it slides, the law at full strength (every
+  tanh factor +-1, the sign of the speed or the power flow); at rest (a mode
+  entered by an event when the follower's speed reaches zero), no motion
+  while the torque that would move it, ``load + offset - T_F0``, stays
+  between the two bounds, the loss sliding forward and backward, and a
+  breakaway event when it leaves them. ``set_valued=False`` keeps the
+  smoothed laws everywhere.
 - Port torques ``tau_B = T_B + mu_B*omega_B`` and ``tau_F = T_F + mu_F*omega_F``
   (rack: ``F_R = F_net + mu_R*v_R``); the block applies ``-tau_X`` to its shaft.
 - Driven side: ``J_F*domega_F/dt = load + load_offset - coulomb(omega_F) - tau_F``
