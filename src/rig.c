@@ -1,21 +1,23 @@
 /* rig.c - a block between a driven base shaft and an inertia (physics.md 11).
  *
- * Three step paths share the mesh of mesh.h:
+ * Four step paths share the mesh of mesh.h:
  *  - rigid mesh, speed-driven base: causal form A; the follower's inertia
  *    torque uses the filtered backward-difference base acceleration;
- *  - rigid mesh, torque-driven base: one degree of freedom; the meshing loss
- *    is linearised around the last follower torque (two fixed passes), the
- *    viscous terms and the load's Coulomb friction are implicit;
+ *  - rigid mesh, torque-driven base: one degree of freedom, backward Euler;
+ *    the viscous terms implicit, the meshing loss and the load's Coulomb
+ *    friction set-valued (closed form per power-flow piece, geared_solve);
+ *  - compliant base shaft: the same solve for the base gear in sub-steps of
+ *    the shaft's implicit midpoint rule;
  *  - backlash: the follower (and a torque-driven base) carry their own
  *    speeds; the contact is integrated by backward Euler in a fixed number
- *    of sub-steps, viscous terms implicit, the meshing loss evaluated at the
- *    start of each sub-step from the last contact force.
+ *    of sub-steps (contact.h), viscous terms implicit, the meshing loss's
+ *    bounds taken from the last contact force.
  *
- * Friction on a free driven side (the load's Coulomb friction, and with
- * backlash the meshing loss) is one mechanism: backward Euler on a friction
- * bounded by its magnitude (a velocity projection). It stops the driven side
- * within a step when the bound can, holds it at rest while the applied torque
- * stays within the Coulomb friction, and never reverses it. */
+ * Friction where a shaft moves freely (the load's Coulomb friction and the
+ * meshing loss, physics.md 11 "Lossy meshes hold") is one mechanism: backward
+ * Euler on a friction bounded by its magnitude in each direction. It stops a
+ * shaft within a step when the bound can, holds it at rest while the applied
+ * torque stays within the bounds, and never reverses it. */
 #include <string.h>
 
 #include "gearsim/rig.h"
