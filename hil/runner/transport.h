@@ -55,13 +55,4 @@ void transport_drain(transport *t, int timeout_ms);
 
 void transport_close(transport *t);
 
-/* One candump -L line ("(1.5) can0 100#0102 R") -> frame. 0, or -1 when the
- * line is not such a frame. Also used by the replay. */
-int candump_parse_line(const char *line, size_t length, gs_hil_frame *frame);
-
-/* frame -> candump -L line stamped stamp_s, python-can's format (6 decimals,
- * upper-case hex, " T" as sent). Returns its length (< size), or 0. */
-size_t candump_format_line(const gs_hil_frame *frame, double stamp_s, const char *channel, char *out,
-                           size_t size);
-
 #endif

@@ -1,9 +1,9 @@
 /*
- * The bridge's logic (gearsim/hil.h), period by period, with the semantics of
- * the Python bridge (docs/hil.md, "Time model", "Commands, modes, safe
- * state", "Frame classes and counters", "Status"): for the same frames at
- * the same periods it steps the rig with the same inputs and sends the same
- * bytes. No I/O, no heap: everything lives in the gs_hil_bridge.
+ * The bridge's logic (gearsim/hil.h), period by period: the one
+ * implementation of docs/hil.md's "Time model", "Commands, modes, safe
+ * state", "Frame classes and counters" and "Status", which the C runner and
+ * the Python bridge both run. No I/O, no heap: everything lives in the
+ * gs_hil_bridge.
  */
 #include <math.h>
 #include <stdio.h>
@@ -11,32 +11,12 @@
 
 #include "gearsim/hil.h"
 
-#define GS_HIL_NAME_STRING_(suffix, name) #name,
-#define GS_HIL_REASON_STRING_(suffix, name) name,
-static const char *const reason_names[GS_HIL_REASONS] = {GS_HIL_REASON_LIST(GS_HIL_REASON_STRING_)};
-static const char *const count_names[GS_HIL_COUNTS] = {GS_HIL_COUNT_LIST(GS_HIL_NAME_STRING_)};
-static const char *const flag_names[GS_HIL_FLAGS] = {GS_HIL_FLAG_LIST(GS_HIL_NAME_STRING_)};
-
-/* The latched flags and the counters whose growth sets them. */
-static const gs_hil_count latched_counts[5] = {
+/* The counters whose growth sets the latched flags, in flag order from
+ * GS_HIL_FLAG_CMD_REJECTED on. */
+static const gs_hil_count latched_counts[GS_HIL_LATCHED_FLAGS] = {
     GS_HIL_COUNT_RX_REJECTED, GS_HIL_COUNT_RX_LATE, GS_HIL_COUNT_SATURATIONS,
     GS_HIL_COUNT_OVERRUNS,    GS_HIL_COUNT_TX_ERRORS,
 };
-
-const char *gs_hil_reason_name(gs_hil_reason reason)
-{
-    return (unsigned)reason < GS_HIL_REASONS ? reason_names[reason] : "?";
-}
-
-const char *gs_hil_count_name(gs_hil_count count)
-{
-    return (unsigned)count < GS_HIL_COUNTS ? count_names[count] : "?";
-}
-
-const char *gs_hil_flag_name(gs_hil_flag flag)
-{
-    return (unsigned)flag < GS_HIL_FLAGS ? flag_names[flag] : "?";
-}
 
 static gs_hil_count reason_class(gs_hil_reason reason)
 {
@@ -65,36 +45,13 @@ static gs_hil_status fail(gs_hil_error *err, const char *parameter, const char *
     return GS_HIL_E_CONFIG;
 }
 
-/* Feedback frames in sending order: the others by ID, then the status frames
- * by ID (so a status frame sees the saturations of its own period). */
-static void order_feedback(gs_hil_bridge *b)
-{
-    const gs_hil_dbc *dbc = b->config.dbc;
-    b->feedback_count = 0;
-    for (int status = 0; status <= 1; ++status) {
-        unsigned first = b->feedback_count;
-        for (unsigned i = 0; i < dbc->frame_count; ++i) {
-            const gs_hil_frame_spec *f = &dbc->frames[i];
-            if (f->kind != GS_HIL_FRAME_FEEDBACK || (f->is_status != 0) != (status != 0)) {
-                continue;
-            }
-            unsigned j = b->feedback_count++;
-            while (j > first && dbc->frames[b->feedback_order[j - 1u]].id > f->id) {
-                b->feedback_order[j] = b->feedback_order[j - 1u];
-                --j;
-            }
-            b->feedback_order[j] = i;
-        }
-    }
-}
-
 static gs_hil_status check_cycles(gs_hil_bridge *b, gs_hil_error *err)
 {
     const gs_hil_dbc *dbc = b->config.dbc;
     for (unsigned i = 0; i < dbc->frame_count; ++i) {
         const gs_hil_frame_spec *f = &dbc->frames[i];
         b->cycle_periods[i] = 0;
-        if (f->kind != GS_HIL_FRAME_FEEDBACK) {
+        if (b->kind[i] != GS_HIL_FRAME_FEEDBACK) {
             continue;
         }
         double n = ((double)f->cycle_ms / 1000.0) / b->period_s;
@@ -111,20 +68,18 @@ static gs_hil_status check_cycles(gs_hil_bridge *b, gs_hil_error *err)
     return GS_HIL_OK;
 }
 
-static gs_hil_status index_commands(gs_hil_bridge *b, gs_hil_error *err)
+static void index_frames(gs_hil_bridge *b)
 {
     const gs_hil_dbc *dbc = b->config.dbc;
     b->command_count = 0;
     for (unsigned i = 0; i < dbc->frame_count; ++i) {
         const gs_hil_frame_spec *f = &dbc->frames[i];
+        b->kind[i] = gs_hil_frame_kind_of(f);
         b->command_index[i] = 0;
-        if (f->kind != GS_HIL_FRAME_COMMAND) {
+        if (b->kind[i] != GS_HIL_FRAME_COMMAND) {
             continue;
         }
-        if (b->command_count == GS_HIL_MAX_COMMAND_FRAMES) {
-            return fail(err, "dbc", "more than 4 command frames");
-        }
-        b->command_index[i] = b->command_count++;
+        b->command_index[i] = b->command_count++; /* at most GS_HIL_MAX_COMMAND_FRAMES: gs_hil_dbc_check */
         for (unsigned s = 0; s < f->signal_count; ++s) {
             int slot = gs_hil_role_command_index(f->signals[s].role);
             if (slot >= 0) {
@@ -132,7 +87,6 @@ static gs_hil_status index_commands(gs_hil_bridge *b, gs_hil_error *err)
             }
         }
     }
-    return GS_HIL_OK;
 }
 
 gs_hil_status gs_hil_bridge_init(gs_hil_bridge *b, const gs_hil_config *config, gs_rig_block block,
@@ -142,6 +96,9 @@ gs_hil_status gs_hil_bridge_init(gs_hil_bridge *b, const gs_hil_config *config, 
         return fail(err, "bridge", "a required pointer is NULL");
     }
     memset(b, 0, sizeof *b);
+    if (gs_hil_dbc_check(config->dbc, err) != GS_HIL_OK) {
+        return GS_HIL_E_CONFIG;
+    }
     b->config = *config;
     b->consts = consts;
     b->state = state;
@@ -163,7 +120,8 @@ gs_hil_status gs_hil_bridge_init(gs_hil_bridge *b, const gs_hil_config *config, 
         return fail(err, "timeout", "timeout is too many periods");
     }
     b->timeout_periods = timeout_periods < 1.0 ? 1u : (uint64_t)timeout_periods;
-    if (index_commands(b, err) != GS_HIL_OK || check_cycles(b, err) != GS_HIL_OK) {
+    index_frames(b);
+    if (check_cycles(b, err) != GS_HIL_OK) {
         return GS_HIL_E_CONFIG;
     }
     int driving = config->base_drive == GS_BASE_SPEED_DRIVEN ? GS_HIL_CMD_BASE_SPEED : GS_HIL_CMD_BASE_TORQUE;
@@ -173,7 +131,7 @@ gs_hil_status gs_hil_bridge_init(gs_hil_bridge *b, const gs_hil_config *config, 
                         ? "the DBC has no cmd.base_speed signal, which a speed-driven rig needs"
                         : "the DBC has no cmd.base_torque signal, which a torque-driven rig needs");
     }
-    order_feedback(b);
+    b->feedback_count = gs_hil_feedback_order(config->dbc, b->feedback_order);
     b->timed_out = 1;
     b->dirty = 1;
     b->flag_state[GS_HIL_FLAG_CMD_TIMEOUT] = 1;
@@ -218,10 +176,10 @@ gs_hil_reason gs_hil_handle(gs_hil_bridge *b, const gs_hil_frame *frame)
     if (spec == NULL) {
         return count_reason(b, GS_HIL_REJECTED_UNKNOWN_ID);
     }
-    if (spec->kind == GS_HIL_FRAME_FEEDBACK) {
+    if (b->kind[index] == GS_HIL_FRAME_FEEDBACK) {
         return count_reason(b, GS_HIL_IGNORED_FEEDBACK_ID);
     }
-    if (spec->kind == GS_HIL_FRAME_OTHER) {
+    if (b->kind[index] == GS_HIL_FRAME_OTHER) {
         return count_reason(b, GS_HIL_IGNORED_OTHER_DBC_FRAME);
     }
     gs_hil_reason decoded = gs_hil_decode_command(spec, frame->data, frame->length, &cmd);
@@ -344,7 +302,10 @@ static double angle_modulo(double x)
     return m;
 }
 
-static double role_value(const gs_hil_bridge *b, const gs_hil_signal *sig)
+/* The model's value of a feedback signal this period: an output or an input
+ * the rig applied. A fault stage (offsets, drops, stuck values) belongs
+ * between this and the encoder. */
+static double model_value(const gs_hil_bridge *b, const gs_hil_signal *sig)
 {
     const gs_real *out = (const gs_real *)(const void *)&b->output;
     switch (sig->role) {
@@ -358,7 +319,8 @@ static double role_value(const gs_hil_bridge *b, const gs_hil_signal *sig)
         return (double)b->input.base_torque;
     case GS_HIL_ROLE_IN_LOAD:
         return (double)b->input.load;
-    case GS_HIL_ROLE_NONE:
+    case GS_HIL_ROLE_NONE: /* a signal without a role: the value in its range nearest 0 */
+        return 0.0;
     case GS_HIL_ROLE_CMD_BASE_SPEED:
     case GS_HIL_ROLE_CMD_BASE_TORQUE:
     case GS_HIL_ROLE_CMD_LOAD:
@@ -366,66 +328,62 @@ static double role_value(const gs_hil_bridge *b, const gs_hil_signal *sig)
     case GS_HIL_ROLE_STATUS_COUNTER:
     case GS_HIL_ROLE_STATUS_FLAG:
     case GS_HIL_ROLE_STATUS_COUNT:
+    case GS_HIL_ROLES:
     default:
         return nan("");
     }
 }
 
-/* A signal without a role is sent as the value in its range nearest 0. */
-static double nearest_zero_value(const gs_hil_signal *sig)
-{
-    double x = sig->minimum > 0.0 ? sig->minimum : 0.0;
-    return x < sig->maximum ? x : sig->maximum;
-}
-
 /* Flags latched since the previous frame of this ID (updated once per frame). */
-static void latch_flags(gs_hil_bridge *b, unsigned frame_index, int latched[5])
+static void latch_flags(gs_hil_bridge *b, unsigned frame_index, int latched[GS_HIL_LATCHED_FLAGS])
 {
-    for (unsigned k = 0; k < 5u; ++k) {
+    for (unsigned k = 0; k < GS_HIL_LATCHED_FLAGS; ++k) {
         uint64_t now = b->counters.count[latched_counts[k]];
         latched[k] = now > b->latched_at[frame_index][k];
         b->latched_at[frame_index][k] = now;
     }
 }
 
-static void encode_signal(gs_hil_bridge *b, unsigned frame_index, const gs_hil_signal *sig, uint8_t *data,
-                          int latched[5], int *have_latched)
+/* The raw value of a status signal (counter, flag, count). */
+static uint64_t status_raw(gs_hil_bridge *b, unsigned frame_index, const gs_hil_signal *sig,
+                           int latched[GS_HIL_LATCHED_FLAGS], int *have_latched)
 {
-    switch (sig->role) {
-    case GS_HIL_ROLE_STATUS_COUNTER:
-        gs_hil_put_raw(sig, b->status_seq[frame_index]++, data);
-        return;
-    case GS_HIL_ROLE_STATUS_COUNT:
-        gs_hil_put_raw(sig, b->counters.count[sig->aux], data);
-        return;
-    case GS_HIL_ROLE_STATUS_FLAG:
-        if (sig->aux <= GS_HIL_FLAG_DRIVE_DISABLED) {
-            gs_hil_put_raw(sig, (uint64_t)(b->flag_state[sig->aux] != 0), data);
-            return;
-        }
-        if (!*have_latched) {
-            latch_flags(b, frame_index, latched);
-            *have_latched = 1;
-        }
-        gs_hil_put_raw(sig, (uint64_t)(latched[sig->aux - GS_HIL_FLAG_CMD_REJECTED] != 0), data);
-        return;
-    case GS_HIL_ROLE_NONE:
-        (void)gs_hil_put_value(sig, nearest_zero_value(sig), data);
-        return;
-    case GS_HIL_ROLE_CMD_BASE_SPEED:
-    case GS_HIL_ROLE_CMD_BASE_TORQUE:
-    case GS_HIL_ROLE_CMD_LOAD:
-    case GS_HIL_ROLE_CMD_MODE:
-    case GS_HIL_ROLE_OUT:
-    case GS_HIL_ROLE_OUT_FOLLOWER_ANGLE:
-    case GS_HIL_ROLE_IN_BASE_SPEED:
-    case GS_HIL_ROLE_IN_BASE_TORQUE:
-    case GS_HIL_ROLE_IN_LOAD:
-    default:
-        if (gs_hil_put_value(sig, role_value(b, sig), data)) {
+    if (sig->role == GS_HIL_ROLE_STATUS_COUNTER) {
+        return b->status_seq[frame_index]++;
+    }
+    if (sig->role == GS_HIL_ROLE_STATUS_COUNT) {
+        return b->counters.count[sig->aux];
+    }
+    if (sig->aux < GS_HIL_STATE_FLAGS) {
+        return (uint64_t)(b->flag_state[sig->aux] != 0);
+    }
+    if (!*have_latched) {
+        latch_flags(b, frame_index, latched);
+        *have_latched = 1;
+    }
+    return (uint64_t)(latched[sig->aux - GS_HIL_STATE_FLAGS] != 0);
+}
+
+static int is_status_signal(const gs_hil_signal *sig)
+{
+    return sig->role == GS_HIL_ROLE_STATUS_COUNTER || sig->role == GS_HIL_ROLE_STATUS_FLAG ||
+           sig->role == GS_HIL_ROLE_STATUS_COUNT;
+}
+
+/* Encode one feedback frame into *frame; clamped values count as saturations. */
+static void encode_frame(gs_hil_bridge *b, unsigned frame_index, gs_hil_frame *frame)
+{
+    const gs_hil_frame_spec *spec = &b->config.dbc->frames[frame_index];
+    int latched[GS_HIL_LATCHED_FLAGS] = {0};
+    int have_latched = 0;
+    for (unsigned s = 0; s < spec->signal_count; ++s) {
+        const gs_hil_signal *sig = &spec->signals[s];
+        if (is_status_signal(sig)) {
+            gs_hil_put_raw(sig, status_raw(b, frame_index, sig, latched, &have_latched), frame->data);
+        } else if (gs_hil_put_value(sig, model_value(b, sig), frame->data) && sig->role != GS_HIL_ROLE_NONE) {
             b->counters.count[GS_HIL_COUNT_SATURATIONS] += 1u;
+            frame->saturated |= (uint64_t)1 << s;
         }
-        return;
     }
 }
 
@@ -439,16 +397,12 @@ static void emit(gs_hil_bridge *b)
             continue;
         }
         const gs_hil_frame_spec *spec = &b->config.dbc->frames[i];
-        int latched[5] = {0};
-        int have_latched = 0;
         memset(&frame, 0, sizeof frame);
         frame.timestamp_s = b->config.stamp_origin_s + (double)n * b->period_s;
         frame.id = spec->id;
         frame.is_extended = spec->is_extended;
         frame.length = spec->length;
-        for (unsigned s = 0; s < spec->signal_count; ++s) {
-            encode_signal(b, i, &spec->signals[s], frame.data, latched, &have_latched);
-        }
+        encode_frame(b, i, &frame);
         if (b->config.send != NULL && b->config.send(b->config.send_context, &frame) != 0) {
             b->counters.count[GS_HIL_COUNT_TX_ERRORS] += 1u;
         } else {
@@ -475,6 +429,27 @@ void gs_hil_advance(gs_hil_bridge *b, uint64_t periods)
         b->counters.count[GS_HIL_COUNT_PERIODS] = now + 1u;
         emit(b);
     }
+}
+
+uint64_t gs_hil_period_at(const gs_hil_bridge *b, double t_s)
+{
+    double k = ceil((t_s - GS_HIL_REPLAY_SLACK_S) / b->period_s);
+    return k > 0.0 ? (uint64_t)k : 0u;
+}
+
+void gs_hil_advance_to(gs_hil_bridge *b, double t_s)
+{
+    uint64_t k = gs_hil_period_at(b, t_s);
+    uint64_t now = b->counters.count[GS_HIL_COUNT_PERIODS];
+    if (k > now) {
+        gs_hil_advance(b, k - now);
+    }
+}
+
+uint64_t gs_hil_periods_in(const gs_hil_bridge *b, double s)
+{
+    double n = nearbyint(s / b->period_s); /* half to even, as Python's round() */
+    return n > 0.0 ? (uint64_t)n : 0u;
 }
 
 void gs_hil_close(gs_hil_bridge *b)

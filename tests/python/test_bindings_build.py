@@ -16,7 +16,10 @@ import pytest
 from gearsim._lib import INPUT_INFO, OUTPUT_INFO, STATE_INFO, ffi, lib
 
 ROOT = Path(__file__).resolve().parents[2]
-HEADERS = sorted((ROOT / "include" / "gearsim").glob("*.h"))
+# the core's public headers and the HIL library's, which the cdef is made of
+HEADERS = sorted((ROOT / "include" / "gearsim").glob("*.h")) + [
+    ROOT / "hil" / "include" / "gearsim" / "hil.h"
+]
 
 
 def _build_module():
@@ -90,6 +93,17 @@ def test_every_public_function_and_table_is_in_the_cdef():
         assert table_type.item is ffi.typeof(item)
         count = getattr(lib, {**FIELD_TABLES, **PARAM_TABLES}[name])
         assert table_type.length == count, name
+
+
+def test_the_hil_library_is_in_the_cdef():
+    """gearsim.hil runs the C HIL library: every function of gearsim/hil.h
+    is callable, and the send callback is the bindings' own."""
+    code = _header_code()
+    declared = set(re.findall(r"\b(gs_hil_\w+)\s*\(", code))
+    assert {"gs_hil_bridge_init", "gs_hil_handle", "gs_hil_advance", "gs_hil_dbc_check"} <= declared
+    for name in sorted(declared):
+        assert ffi.typeof(getattr(lib, name)).kind == "function", name
+    assert ffi.typeof(lib.gspy_hil_send) is ffi.typeof("int(*)(void *, const gs_hil_frame *)")
 
 
 def test_the_extension_was_built_from_these_headers():

@@ -1,9 +1,10 @@
 /*
- * gearsim/hil.h - the embeddable part of the C HIL runner (docs/hil-runner.md).
+ * gearsim/hil.h - a gearsim rig behind CAN frames (docs/hil-runner.md).
  *
- * A gs_hil_bridge puts a gearsim rig (gearsim/rig.h) behind CAN frames, with
- * the semantics of the Python bridge (docs/hil.md): commands are classified
- * (used, rejected, late, ignored), latched and applied at the next frame
+ * The one implementation of the HIL bridge's semantics (docs/hil.md): the C
+ * runner gearsim-hil and the Python bridge (gearsim.hil, through cffi) both
+ * run it. A gs_hil_bridge classifies every received frame (used, rejected,
+ * late, ignored), latches valid commands and applies them at the next frame
  * period (zero-order hold); a command timeout puts the rig in its safe state;
  * feedback frames are sent at their DBC cycle times, values clamped into
  * their DBC range and flagged, never wrapped; the status frames carry a
@@ -11,8 +12,12 @@
  *
  * No I/O, no heap, no clock: frames come in through gs_hil_handle and go out
  * through a callback; simulated time advances by step count (gs_hil_advance).
- * The frame layouts come from the DBC at build time (hil/dbc_tables.py
- * writes one gs_hil_dbc per DBC file).
+ *
+ * Every name a DBC may use (roles, flags, counters, modes) and every name of
+ * a received frame's fate (reasons) is listed once below; the rules a DBC
+ * must follow are gs_hil_dbc_check's. A frame table (gs_hil_dbc) is made
+ * from a DBC file by hil/dbc_tables.py at build time (the DBCs built into the
+ * runner: gearsim/hil_dbc.h) or by gearsim.hil at run time.
  */
 #ifndef GEARSIM_HIL_H
 #define GEARSIM_HIL_H
@@ -29,73 +34,87 @@ extern "C" {
 #define GS_HIL_MAX_FRAMES 32
 #define GS_HIL_MAX_COMMAND_FRAMES 4 /* one per command role at most */
 #define GS_HIL_MAX_DATA 8           /* classic CAN */
+#define GS_HIL_LATCHED_FLAGS 5      /* the latched flags: the last five of GS_HIL_FLAG_LIST */
+#define GS_HIL_STATE_FLAGS 3        /* the state flags: the first three */
+/* A replayed frame up to this long after a period boundary counts as at it
+ * (the rounding of log formats and of epoch time stamps), in seconds. */
+#define GS_HIL_REPLAY_SLACK_S 1e-6
 
-/* Index of a gs_rig_output member, for the generated tables. */
+/* Index of a gs_rig_output member, for the frame tables. */
 #define GS_HIL_OUTPUT_INDEX(field) (offsetof(gs_rig_output, field) / sizeof(gs_real))
 
-typedef enum {
-    GS_HIL_ROLE_NONE = 0,
-    GS_HIL_ROLE_CMD_BASE_SPEED,
-    GS_HIL_ROLE_CMD_BASE_TORQUE,
-    GS_HIL_ROLE_CMD_LOAD,
-    GS_HIL_ROLE_CMD_MODE,
-    GS_HIL_ROLE_OUT,                /* aux: GS_HIL_OUTPUT_INDEX(field) */
-    GS_HIL_ROLE_OUT_FOLLOWER_ANGLE, /* follower_position modulo 2*pi, in [0, 2*pi) */
-    GS_HIL_ROLE_IN_BASE_SPEED,
-    GS_HIL_ROLE_IN_BASE_TORQUE,
-    GS_HIL_ROLE_IN_LOAD,
-    GS_HIL_ROLE_STATUS_COUNTER,
-    GS_HIL_ROLE_STATUS_FLAG,  /* aux: gs_hil_flag */
-    GS_HIL_ROLE_STATUS_COUNT  /* aux: gs_hil_count */
-} gs_hil_role;
-
-/* The command roles' slots in gs_hil_command.value. */
-enum { GS_HIL_CMD_BASE_SPEED = 0, GS_HIL_CMD_BASE_TORQUE, GS_HIL_CMD_LOAD, GS_HIL_CMD_MODE, GS_HIL_CMD_ROLES };
-
-typedef enum { GS_HIL_MODE_DISABLED = 0, GS_HIL_MODE_SPEED = 1, GS_HIL_MODE_TORQUE = 2 } gs_hil_mode;
-
 /*
- * Flags, counters and reasons are each listed once, as X(ENUM_SUFFIX, name):
- * the enums below and the name strings of bridge.c are expanded from these
- * lists. The Python side (codec and the table generator) takes its flag and
- * counter names from bindings/python/gearsim/hil/dbc_rules.py; each
- * generated table file checks at compile time that both name the same flags
- * and counters in the same order.
+ * What a signal means: the string attribute GsRole of a DBC signal, listed
+ * as X(ENUM_SUFFIX, "name"). A name ending in '.' is a family, followed by
+ * the name of a gs_rig_output field (out.), a flag (status.flag.) or a
+ * counter (status.count.); gs_hil_signal.aux says which.
  */
+#define GS_HIL_ROLE_LIST(X)                                                                         \
+    X(NONE, "")                                                                                     \
+    X(CMD_BASE_SPEED, "cmd.base_speed")                                                             \
+    X(CMD_BASE_TORQUE, "cmd.base_torque")                                                           \
+    X(CMD_LOAD, "cmd.load")                                                                         \
+    X(CMD_MODE, "cmd.mode")                                                                         \
+    X(OUT, "out.")                                  /* aux: GS_HIL_OUTPUT_INDEX(field) */           \
+    X(OUT_FOLLOWER_ANGLE, "out.follower_angle")     /* follower_position modulo 2*pi, [0, 2*pi) */  \
+    X(IN_BASE_SPEED, "in.base_speed")               /* the inputs the rig applied */                \
+    X(IN_BASE_TORQUE, "in.base_torque")                                                             \
+    X(IN_LOAD, "in.load")                                                                           \
+    X(STATUS_COUNTER, "status.counter")             /* rolling: +1 per frame sent */                \
+    X(STATUS_FLAG, "status.flag.")                  /* aux: gs_hil_flag */                          \
+    X(STATUS_COUNT, "status.count.")                /* aux: gs_hil_count */
+
+/* The modes of a cmd.mode signal; its raw values without a value table. */
+#define GS_HIL_MODE_LIST(X)                                                                         \
+    X(DISABLED, "disabled")                                                                         \
+    X(SPEED, "speed")                                                                               \
+    X(TORQUE, "torque")
+
+/* Further names a cmd.mode value table may give a mode (case and surrounding
+ * blanks do not matter). */
+#define GS_HIL_MODE_ALIAS_LIST(X)                                                                   \
+    X(DISABLED, "disable")                                                                          \
+    X(DISABLED, "off")                                                                              \
+    X(DISABLED, "safe")
+
+/* Status flags: the first GS_HIL_STATE_FLAGS are the state during the
+ * period the status frame ends; the others are latched: set when their
+ * counter grew since the previous frame of the same ID. */
 #define GS_HIL_FLAG_LIST(X)                                                                         \
-    X(CMD_TIMEOUT, cmd_timeout)                                                                     \
-    X(SAFE_STATE, safe_state)                                                                       \
-    X(DRIVE_DISABLED, drive_disabled)                                                               \
-    X(CMD_REJECTED, cmd_rejected)   /* latched: since the previous frame of the same ID */          \
-    X(CMD_LATE, cmd_late)                                                                           \
-    X(FB_SATURATED, fb_saturated)                                                                   \
-    X(OVERRUN, overrun)                                                                             \
-    X(TX_ERROR, tx_error)
+    X(CMD_TIMEOUT, "cmd_timeout")                                                                   \
+    X(SAFE_STATE, "safe_state")                                                                     \
+    X(DRIVE_DISABLED, "drive_disabled")                                                             \
+    X(CMD_REJECTED, "cmd_rejected")     /* rx_rejected grew */                                      \
+    X(CMD_LATE, "cmd_late")             /* rx_late grew */                                          \
+    X(FB_SATURATED, "fb_saturated")     /* saturations grew */                                      \
+    X(OVERRUN, "overrun")               /* overruns grew */                                         \
+    X(TX_ERROR, "tx_error")             /* tx_errors grew */
 
 /* The counters, in the order of gs_hil_counters.count. */
 #define GS_HIL_COUNT_LIST(X)                                                                        \
-    X(RX_TOTAL, rx_total)                                                                           \
-    X(RX_USED, rx_used)                                                                             \
-    X(RX_REJECTED, rx_rejected)                                                                     \
-    X(RX_LATE, rx_late)                                                                             \
-    X(RX_IGNORED, rx_ignored)                                                                       \
-    X(TX_FRAMES, tx_frames)                                                                         \
-    X(TX_ERRORS, tx_errors)                                                                         \
-    X(TIMEOUTS, timeouts)           /* entries into the command timeout after commands came */      \
-    X(RECOVERIES, recoveries)       /* exits from it */                                             \
-    X(OVERRUNS, overruns)           /* paced run: periods that started more than a period late */   \
-    X(RESYNCS, resyncs)             /* paced run: schedule moved to now */                          \
-    X(SATURATIONS, saturations)                                                                     \
-    X(PERIODS, periods)
+    X(RX_TOTAL, "rx_total")                                                                         \
+    X(RX_USED, "rx_used")                                                                           \
+    X(RX_REJECTED, "rx_rejected")                                                                   \
+    X(RX_LATE, "rx_late")                                                                           \
+    X(RX_IGNORED, "rx_ignored")                                                                     \
+    X(TX_FRAMES, "tx_frames")                                                                       \
+    X(TX_ERRORS, "tx_errors")                                                                       \
+    X(TIMEOUTS, "timeouts")           /* entries into the command timeout after commands came */    \
+    X(RECOVERIES, "recoveries")       /* exits from it */                                           \
+    X(OVERRUNS, "overruns")           /* paced run: periods that started more than a period late */ \
+    X(RESYNCS, "resyncs")             /* paced run: schedule moved to now */                        \
+    X(SATURATIONS, "saturations")                                                                   \
+    X(PERIODS, "periods")
 
-/* What became of a received frame: its class and reason (the Python bridge's
- * reason keys). PENDING is a valid command, applied by the next period;
- * LATE_SUPERSEDED is counted for the older command a newer one replaced. */
+/* What became of a received frame: "class.reason". PENDING is a valid
+ * command, applied by the next period; LATE_SUPERSEDED is counted for the
+ * older command a newer one replaced. The classes are rejected, late and
+ * ignored, in this order. */
 #define GS_HIL_REASON_LIST(X)                                                                       \
     X(PENDING, "pending")                                                                           \
-    X(REJECTED_UNKNOWN_ID, "rejected.unknown_id")                                                   \
+    X(REJECTED_UNKNOWN_ID, "rejected.unknown_id")   /* not in the DBC, or extended/standard */      \
     X(REJECTED_BAD_LENGTH, "rejected.bad_length")                                                   \
-    X(REJECTED_UNDECODABLE, "rejected.undecodable")                                                 \
+    X(REJECTED_UNDECODABLE, "rejected.undecodable") /* not finite, or no such mode */               \
     X(REJECTED_OUT_OF_RANGE, "rejected.out_of_range")                                               \
     X(REJECTED_MODE_MISMATCH, "rejected.mode_mismatch")                                             \
     X(LATE_SUPERSEDED, "late.superseded")                                                           \
@@ -106,45 +125,70 @@ typedef enum { GS_HIL_MODE_DISABLED = 0, GS_HIL_MODE_SPEED = 1, GS_HIL_MODE_TORQ
     X(IGNORED_ERROR_FRAME, "ignored.error_frame")                                                   \
     X(IGNORED_REMOTE_FRAME, "ignored.remote_frame")
 
+#define GS_HIL_ROLE_ENUM_(suffix, name) GS_HIL_ROLE_##suffix,
+#define GS_HIL_MODE_ENUM_(suffix, name) GS_HIL_MODE_##suffix,
 #define GS_HIL_FLAG_ENUM_(suffix, name) GS_HIL_FLAG_##suffix,
 #define GS_HIL_COUNT_ENUM_(suffix, name) GS_HIL_COUNT_##suffix,
 #define GS_HIL_REASON_ENUM_(suffix, name) GS_HIL_##suffix,
 
+typedef enum { GS_HIL_ROLE_LIST(GS_HIL_ROLE_ENUM_) GS_HIL_ROLES } gs_hil_role;
+typedef enum { GS_HIL_MODE_LIST(GS_HIL_MODE_ENUM_) GS_HIL_MODES } gs_hil_mode;
 typedef enum { GS_HIL_FLAG_LIST(GS_HIL_FLAG_ENUM_) GS_HIL_FLAGS } gs_hil_flag;
 typedef enum { GS_HIL_COUNT_LIST(GS_HIL_COUNT_ENUM_) GS_HIL_COUNTS } gs_hil_count;
 typedef enum { GS_HIL_REASON_LIST(GS_HIL_REASON_ENUM_) GS_HIL_REASONS } gs_hil_reason;
 
-/* "rejected.unknown_id", ... (the Python bridge's reason keys); "pending". */
-const char *gs_hil_reason_name(gs_hil_reason reason);
-/* "rx_total", ... ; "cmd_timeout", ... */
-const char *gs_hil_count_name(gs_hil_count count);
-const char *gs_hil_flag_name(gs_hil_flag flag);
+/* The command roles' slots in gs_hil_command.value. */
+enum { GS_HIL_CMD_BASE_SPEED = 0, GS_HIL_CMD_BASE_TORQUE, GS_HIL_CMD_LOAD, GS_HIL_CMD_MODE, GS_HIL_CMD_ROLES };
 
-typedef enum { GS_HIL_FRAME_COMMAND = 0, GS_HIL_FRAME_FEEDBACK, GS_HIL_FRAME_OTHER } gs_hil_frame_kind;
+/* The names of the lists above ("" or "?" out of range). */
+const char *gs_hil_role_name(gs_hil_role role);     /* "cmd.load", "out." (a family) */
+const char *gs_hil_mode_name(gs_hil_mode mode);     /* "disabled", "speed", "torque" */
+const char *gs_hil_flag_name(gs_hil_flag flag);     /* "cmd_timeout", ... */
+const char *gs_hil_count_name(gs_hil_count count);  /* "rx_total", ... */
+const char *gs_hil_reason_name(gs_hil_reason reason); /* "rejected.unknown_id", ... "pending" */
 
-/* One signal of a DBC frame (little-endian integer signals only). */
+/* A GsRole text -> *role and *aux (0 where no aux). 0, or -1 when the text
+ * names no role ("" included). */
+int gs_hil_role_parse(const char *text, gs_hil_role *role, size_t *aux);
+
+/* A mode name of a cmd.mode value table -> gs_hil_mode, or -1. */
+int gs_hil_mode_parse(const char *name);
+
+/* The slot of a command role in gs_hil_command.value (GS_HIL_CMD_*), -1 for
+ * any other role. */
+int gs_hil_role_command_index(gs_hil_role role);
+
+/* ---- frame tables -------------------------------------------------------- */
+
+/* One entry of a signal's value table. */
+typedef struct {
+    int64_t value; /* looked up by the physical value truncated to an integer */
+    const char *name;
+} gs_hil_choice;
+
+/* One signal of a DBC frame: integer (signed or not) or IEEE float (32 or 64
+ * bits), little-endian (Intel) or big-endian (Motorola). */
 typedef struct {
     const char *name;
-    unsigned start, length; /* bits */
-    int is_signed;
+    unsigned start, length;     /* bits, as the DBC numbers them (big-endian: the most significant bit) */
+    int is_signed, is_big_endian, is_float;
     double scale, offset;
-    double minimum, maximum; /* physical; the DBC's, or the raw range when the DBC gives none */
+    double minimum, maximum;    /* physical, as the DBC gives them: -HUGE_VAL / HUGE_VAL for none */
     gs_hil_role role;
     size_t aux;
-    const signed char *modes; /* cmd.mode: gs_hil_mode per raw value - raw minimum, -1 undefined */
-    int mode_choices;         /* cmd.mode has a value table: an undefined value is checked first */
+    const gs_hil_choice *choices; /* the value table, or NULL */
+    unsigned choice_count;
 } gs_hil_signal;
 
 typedef struct {
     const char *name;
     uint32_t id;
     int is_extended;
-    unsigned length; /* bytes */
-    gs_hil_frame_kind kind;
+    unsigned length;   /* bytes */
     unsigned cycle_ms; /* GenMsgCycleTime, 0 = none */
+    int is_multiplexed;
     const gs_hil_signal *signals;
     unsigned signal_count;
-    int is_status; /* holds status.* roles (sent after the other feedback of a period) */
 } gs_hil_frame_spec;
 
 typedef struct {
@@ -154,31 +198,64 @@ typedef struct {
     unsigned frame_count;
 } gs_hil_dbc;
 
-/* The DBCs built into the library (hil/dbc/gear_rig.dbc, hil/dbc/rack_rig.dbc). */
-extern const gs_hil_dbc gs_hil_dbc_gear_rig;
-extern const gs_hil_dbc gs_hil_dbc_rack_rig;
+/* What a frame is, from its signals' roles: a command frame holds a cmd.*
+ * role, a feedback frame any other role, an "other" frame none. */
+typedef enum { GS_HIL_FRAME_COMMAND = 0, GS_HIL_FRAME_FEEDBACK, GS_HIL_FRAME_OTHER } gs_hil_frame_kind;
+
+gs_hil_frame_kind gs_hil_frame_kind_of(const gs_hil_frame_spec *spec);
+
+/* A feedback frame holding status.* roles: sent after the other feedback of
+ * its period, so that it counts their saturations. */
+int gs_hil_frame_is_status(const gs_hil_frame_spec *spec);
+
+/* The feedback frames' indices in sending order (the others by ID, then the
+ * status frames by ID); returns their number. */
+unsigned gs_hil_feedback_order(const gs_hil_dbc *dbc, unsigned order[GS_HIL_MAX_FRAMES]);
+
+typedef enum {
+    GS_HIL_OK = 0,
+    GS_HIL_E_CONFIG = -1, /* see gs_hil_error: parameter and message */
+} gs_hil_status;
+
+typedef struct {
+    const char *parameter;
+    char message[256];
+} gs_hil_error;
+
+/* The rules a frame table must follow, each refused with one message naming
+ * the frame and signal (parameter "dbc"): roles known and in range of their
+ * lists; a command role on one signal only; a frame not mixing command and
+ * feedback roles; a feedback frame with a cycle time; no multiplexed command
+ * or feedback frame; command and feedback frames of at most 8 bytes with
+ * every signal inside them; a feedback signal's range within what its bits
+ * hold (so that no value wraps); counters unsigned integers of scale 1,
+ * offset 0; flags able to hold 0 and 1; mode signals integers whose value
+ * names are modes; at most GS_HIL_MAX_FRAMES frames and
+ * GS_HIL_MAX_COMMAND_FRAMES command frames. gs_hil_bridge_init checks it. */
+gs_hil_status gs_hil_dbc_check(const gs_hil_dbc *dbc, gs_hil_error *err);
+
+/* ---- codec --------------------------------------------------------------- */
 
 /* A classic CAN frame. timestamp_s: receive time (the out-of-order check
- * compares it) or, for frames the bridge sends, the stamp it chose. */
+ * compares it) or, for frames the bridge sends, stamp_origin_s + simulated
+ * time. saturated: of a frame the bridge sends, bit s set when signal s of
+ * its frame spec was clamped. */
 typedef struct {
     double timestamp_s;
     uint32_t id;
     int is_extended, is_remote, is_error;
     unsigned length;
     uint8_t data[GS_HIL_MAX_DATA];
+    uint64_t saturated;
 } gs_hil_frame;
 
-/* ---- codec ------------------------------------------------------------- */
-
-/* Decoded command: value[GS_HIL_CMD_*] (mode as gs_hil_mode), present[]. */
+/* Decoded command: value[GS_HIL_CMD_*] (mode as gs_hil_mode), present[];
+ * signal: the index of the signal that decided a rejection, else -1. */
 typedef struct {
     double value[GS_HIL_CMD_ROLES];
     int present[GS_HIL_CMD_ROLES];
+    int signal;
 } gs_hil_command;
-
-/* The slot of a command role in gs_hil_command.value (GS_HIL_CMD_*), -1 for
- * any other role. */
-int gs_hil_role_command_index(gs_hil_role role);
 
 /* Decode and range-check a command frame: GS_HIL_PENDING with *cmd filled,
  * or GS_HIL_REJECTED_BAD_LENGTH / _UNDECODABLE / _OUT_OF_RANGE. The first
@@ -186,18 +263,23 @@ int gs_hil_role_command_index(gs_hil_role role);
 gs_hil_reason gs_hil_decode_command(const gs_hil_frame_spec *spec, const uint8_t *data, unsigned length,
                                     gs_hil_command *cmd);
 
+/* The range a signal's values are kept in: its DBC range within what its
+ * bits hold. */
+void gs_hil_signal_limits(const gs_hil_signal *sig, double *minimum, double *maximum);
+
 /* Physical value of a signal in data (raw * scale + offset). */
 double gs_hil_signal_value(const gs_hil_signal *sig, const uint8_t *data);
 
-/* Put a physical value into data: clamped into [minimum, maximum] (NaN: the
- * value in range nearest 0; +-inf: the bound), then raw = round half to even
- * ((x - offset) / scale). Returns 1 when the value was clamped, else 0. */
+/* Put a physical value into data: clamped into gs_hil_signal_limits (NaN:
+ * the value in range nearest 0; +-inf: the bound), then raw = round half to
+ * even ((x - offset) / scale), or that quotient as a float for a float
+ * signal. Returns 1 when the value was clamped, else 0. */
 int gs_hil_put_value(const gs_hil_signal *sig, double value, uint8_t *data);
 
 /* Put a raw value (counters: taken modulo 2^length). */
 void gs_hil_put_raw(const gs_hil_signal *sig, uint64_t raw, uint8_t *data);
 
-/* ---- the bridge ------------------------------------------------------------ */
+/* ---- the bridge ---------------------------------------------------------- */
 
 typedef struct {
     uint64_t count[GS_HIL_COUNTS];
@@ -211,12 +293,12 @@ typedef int (*gs_hil_send_fn)(void *context, const gs_hil_frame *frame);
 
 typedef struct {
     const gs_hil_dbc *dbc;
-    gs_base_drive base_drive;   /* must be the rig's */
-    gs_real dt_s;               /* the rig's step */
-    unsigned substeps;          /* rig steps per frame period (>= 1) */
-    double timeout_s;           /* command timeout, rounded to whole periods (>= 1) */
+    gs_base_drive base_drive;      /* must be the rig's */
+    gs_real dt_s;                  /* the rig's step */
+    unsigned substeps;             /* rig steps per frame period (>= 1) */
+    double timeout_s;              /* command timeout, rounded to whole periods (>= 1) */
     gs_real ambient_temperature_K; /* the ambient and measured temperature inputs */
-    double stamp_origin_s;      /* sent frames carry stamp_origin_s + periods * period_s */
+    double stamp_origin_s;         /* sent frames carry stamp_origin_s + periods * period_s */
     gs_hil_send_fn send;
     void *send_context;
 } gs_hil_config;
@@ -235,8 +317,9 @@ typedef struct {
     gs_rig_state *state;
     double period_s; /* dt_s * substeps */
     uint64_t timeout_periods;
-    unsigned cycle_periods[GS_HIL_MAX_FRAMES]; /* feedback frames, 0 otherwise */
-    unsigned feedback_order[GS_HIL_MAX_FRAMES]; /* frame indices: others by ID, then status by ID */
+    gs_hil_frame_kind kind[GS_HIL_MAX_FRAMES];
+    unsigned cycle_periods[GS_HIL_MAX_FRAMES];  /* feedback frames, 0 otherwise */
+    unsigned feedback_order[GS_HIL_MAX_FRAMES]; /* gs_hil_feedback_order */
     unsigned feedback_count;
     unsigned command_index[GS_HIL_MAX_FRAMES]; /* frame index -> command slot */
     unsigned command_count;
@@ -244,28 +327,18 @@ typedef struct {
     int has_role[GS_HIL_CMD_ROLES];
     int timed_out, ever_commanded, dirty, closed;
     uint64_t stale_at;
-    int flag_state[3]; /* cmd_timeout, safe_state, drive_disabled */
+    int flag_state[GS_HIL_STATE_FLAGS]; /* cmd_timeout, safe_state, drive_disabled */
     gs_rig_input input;
     gs_rig_output output;
     unsigned status_seq[GS_HIL_MAX_FRAMES];
-    uint64_t latched_at[GS_HIL_MAX_FRAMES][5];
+    uint64_t latched_at[GS_HIL_MAX_FRAMES][GS_HIL_LATCHED_FLAGS];
     gs_hil_counters counters;
 } gs_hil_bridge;
 
-typedef enum {
-    GS_HIL_OK = 0,
-    GS_HIL_E_CONFIG = -1, /* see gs_hil_error: parameter and message */
-} gs_hil_status;
-
-typedef struct {
-    const char *parameter;
-    char message[200];
-} gs_hil_error;
-
 /* Set up a bridge around an initialised rig (gs_rig_init_*: consts read, state
- * stepped). Checks: DBC for the rig's block, the driving command role present,
- * substeps >= 1, timeout > 0, every feedback cycle time a whole number of
- * frame periods. */
+ * stepped). Checks: the frame table (gs_hil_dbc_check), a DBC for the rig's
+ * block, the driving command role present, substeps >= 1, timeout > 0, every
+ * feedback cycle time a whole number of frame periods. */
 gs_hil_status gs_hil_bridge_init(gs_hil_bridge *bridge, const gs_hil_config *config, gs_rig_block block,
                                  const gs_rig_consts *consts, gs_rig_state *state, gs_hil_error *err);
 
@@ -275,6 +348,17 @@ gs_hil_reason gs_hil_handle(gs_hil_bridge *bridge, const gs_hil_frame *frame);
 /* Run n frame periods: apply pending commands, check the timeout, step the
  * rig substeps times, send the feedback that is due. Never blocks. */
 void gs_hil_advance(gs_hil_bridge *bridge, uint64_t periods);
+
+/* Replay in log time: a frame t_s seconds after the log's first frame is
+ * handled at the first period boundary at or after t_s (within
+ * GS_HIL_REPLAY_SLACK_S), so that it acts on the period starting there.
+ * gs_hil_period_at is that boundary's period count; gs_hil_advance_to runs
+ * the periods up to it (nothing when it has passed). */
+uint64_t gs_hil_period_at(const gs_hil_bridge *bridge, double t_s);
+void gs_hil_advance_to(gs_hil_bridge *bridge, double t_s);
+
+/* Whole frame periods in s seconds, rounded half to even (0 for s <= 0). */
+uint64_t gs_hil_periods_in(const gs_hil_bridge *bridge, double s);
 
 /* Stop: pending commands count as late (after_stop). Idempotent. */
 void gs_hil_close(gs_hil_bridge *bridge);

@@ -361,7 +361,7 @@ def test_a_long_pause_needs_max_gap_and_replays_in_bounded_chunks(
     work: dict[str, Path], capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     from gearsim.hil import bridge as bridge_mod
-    from gearsim.hil.replay import CHUNK_STEPS
+    from gearsim.hil.bridge import CHUNK_STEPS
 
     log = work["dir"] / "pause.log"
     _rewrite(work["log"], log, lambda i, t: t + (70.0 if i >= 50 else 0.0))
@@ -370,13 +370,13 @@ def test_a_long_pause_needs_max_gap_and_replays_in_bounded_chunks(
     _one_error_line(err, "frame 51", "jumps forward by 70 s", "limit of 60 s")
 
     calls: list[int] = []
-    original = bridge_mod.Bridge.advance
+    original = bridge_mod.Bridge._run_c
 
-    def spy(self: Any, periods: int = 1) -> None:
+    def spy(self: Any, periods: int) -> None:
         calls.append(periods)
         original(self, periods)
 
-    monkeypatch.setattr(bridge_mod.Bridge, "advance", spy)
+    monkeypatch.setattr(bridge_mod.Bridge, "_run_c", spy)
     rc, out, err = _run(
         capsys,
         "hil",
@@ -391,7 +391,8 @@ def test_a_long_pause_needs_max_gap_and_replays_in_bounded_chunks(
         "--json",
     )
     assert rc == 0, err
-    # 70 s at 1 ms x 4 sub-steps is 280 000 rig steps: never asked of the rig at once
+    # 70 s at 1 ms x 4 sub-steps is 280 000 rig steps: never one C call (Ctrl-C waits
+    # for the call to return)
     assert sum(calls) >= 70_000 and max(calls) * 4 <= CHUNK_STEPS
     # to-csv holds the last values across the pause, within the sample limit
     rc, out, err = _run(
