@@ -15,12 +15,15 @@
  * integrated implicitly (backward Euler on the contact, a fixed number of
  * sub-steps), so stiff contact stays bounded at any dt.
  *
- * Wherever the driven side moves freely (torque-driven base, or backlash),
- * load_coulomb_friction is a true Coulomb friction integrated implicitly: it
- * holds the driven side at rest while the applied torque stays within it and
- * never reverses the motion; the meshing loss can likewise stop the follower
- * but not reverse it. In the speed-driven rigid rig the speed is imposed and
- * the Coulomb friction is tanh-smoothed on load_coulomb_speed_threshold.
+ * Wherever a shaft moves freely (torque-driven base, backlash, compliant
+ * shaft), load_coulomb_friction is a true Coulomb friction integrated
+ * implicitly: it holds the driven side at rest while the applied torque stays
+ * within it and never reverses the motion. The meshing loss is a friction of
+ * the same kind there: the law at full strength while the gear turns, and at
+ * rest it holds while neither side can drive the other (physics.md 11). In
+ * the speed-driven rigid rig the speed is imposed, the meshing loss is the
+ * smoothed law and the Coulomb friction is tanh-smoothed on
+ * load_coulomb_speed_threshold.
  *
  * Three rig terms go beyond the seed blocks (physics.md 11), each off by
  * default: a Stribeck hump on the driven side's friction (it then holds at
@@ -114,9 +117,9 @@ GS_API extern const gs_field_info gs_rig_state_info[GS_RIG_STATE_FIELDS];
  * stale count, and the compiler's message gives the value to write here
  * (src/mesh.h, GS_CONSTS_REALS_CHECK_). */
 #ifdef GS_SINGLE_PRECISION
-#define GS_RIG_CONSTS_REALS 211
+#define GS_RIG_CONSTS_REALS 249
 #else
-#define GS_RIG_CONSTS_REALS 203
+#define GS_RIG_CONSTS_REALS 241
 #endif
 typedef struct {
     gs_real opaque_[GS_RIG_CONSTS_REALS];
