@@ -150,7 +150,7 @@ for opt in O2 Os; do
   t1=$(date +%s.%N)
   secs=$(python3 -c "print(f'{$t1-$t0:.1f}')")
   if [ "$rc" = 124 ]; then
-    fail "-$opt: QEMU timed out after ${qemu_timeout}s (a fault hangs the program)"; continue
+    fail "-$opt: QEMU timed out after ${qemu_timeout}s (the program never ended)"; continue
   elif [ "$rc" != 0 ]; then
     fail "-$opt: QEMU program exited $rc"; tail -5 "$out/qemu-$opt.txt" "$out/qemu-$opt.err"; continue
   fi
