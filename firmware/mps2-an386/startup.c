@@ -97,6 +97,10 @@ void board_counter_start(void)
     SYST_RVR = 0x00FFFFFFU;
     SYST_CVR = 0U;
     SYST_CSR = 0x7U; /* core clock, interrupt on wrap, enable */
+    /* The cleared counter reads 0 until it loads the reload value on the
+     * first tick; board_instructions would take that 0 for a whole period. */
+    while (SYST_CVR == 0U) {
+    }
 }
 
 uint64_t board_instructions(void)
