@@ -152,7 +152,7 @@ for opt in O2 Os; do
   if [ "$rc" = 124 ]; then
     fail "-$opt: QEMU timed out after ${qemu_timeout}s (the program never ended)"; continue
   elif [ "$rc" != 0 ]; then
-    fail "-$opt: QEMU program exited $rc"; tail -5 "$out/qemu-$opt.txt" "$out/qemu-$opt.err"; continue
+    fail "-$opt: QEMU program exited $rc"; tail -n 5 "$out/qemu-$opt.txt" "$out/qemu-$opt.err"; continue
   fi
   pass "-$opt: QEMU run ended normally in ${secs}s: $(grep '^done' "$out/qemu-$opt.txt")"
   grep '^# layout' "$out/qemu-$opt.txt" | sed 's/^# /  target /'
