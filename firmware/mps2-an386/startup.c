@@ -14,16 +14,16 @@
 
 #include "board.h"
 
-#define CPACR (*(volatile uint32_t *)0xE000ED88U)
+#define CPACR    (*(volatile uint32_t *)0xE000ED88U)
 #define SYST_CSR (*(volatile uint32_t *)0xE000E010U)
 #define SYST_RVR (*(volatile uint32_t *)0xE000E014U)
 #define SYST_CVR (*(volatile uint32_t *)0xE000E018U)
 
 /* Semihosting operations and SYS_EXIT reasons (ARM semihosting 2.0). */
-#define SEMIHOST_SYS_WRITE0 0x04U
-#define SEMIHOST_SYS_EXIT 0x18U
+#define SEMIHOST_SYS_WRITE0       0x04U
+#define SEMIHOST_SYS_EXIT         0x18U
 #define SEMIHOST_APPLICATION_EXIT 0x20026U /* ADP_Stopped_ApplicationExit: status 0 */
-#define SEMIHOST_RUNTIME_ERROR 0x20023U    /* ADP_Stopped_RunTimeErrorUnknown: status 1 */
+#define SEMIHOST_RUNTIME_ERROR    0x20023U /* ADP_Stopped_RunTimeErrorUnknown: status 1 */
 
 /* mps2_an386.ld */
 extern uint32_t __stack_top;
@@ -52,8 +52,7 @@ void Reset_Handler(void)
     }
 #ifdef BOARD_NEWLIB_START
     _start();
-    for (;;) {
-    }
+    for (;;) {}
 #else
     board_exit(main());
 #endif
@@ -83,10 +82,13 @@ __attribute__((section(".vectors"), used)) const board_vector board_vector_table
     Default_Handler, /* MemManage */
     Default_Handler, /* BusFault */
     Default_Handler, /* UsageFault */
-    0, 0, 0, 0,
+    0,               /* reserved */
+    0,               /* reserved */
+    0,               /* reserved */
+    0,               /* reserved */
     Default_Handler, /* SVCall */
     Default_Handler, /* DebugMonitor */
-    0,
+    0,               /* reserved */
     Default_Handler, /* PendSV */
     SysTick_Handler,
 };
@@ -99,8 +101,7 @@ void board_counter_start(void)
     SYST_CSR = 0x7U; /* core clock, interrupt on wrap, enable */
     /* The cleared counter reads 0 until it loads the reload value on the
      * first tick; board_instructions would take that 0 for a whole period. */
-    while (SYST_CVR == 0U) {
-    }
+    while (SYST_CVR == 0U) {}
 }
 
 uint64_t board_instructions(void)
@@ -134,6 +135,5 @@ void board_exit(int code)
     register uint32_t r0 __asm__("r0") = SEMIHOST_SYS_EXIT;
     register uint32_t r1 __asm__("r1") = code == 0 ? SEMIHOST_APPLICATION_EXIT : SEMIHOST_RUNTIME_ERROR;
     __asm__ volatile("bkpt 0xab" : : "r"(r0), "r"(r1) : "memory");
-    for (;;) {
-    }
+    for (;;) {}
 }
