@@ -192,8 +192,8 @@ def measure(build: Path) -> dict:
         print("m4_bench.py: qemu-system-arm not found; no instruction counts", file=sys.stderr)
         return out
     bench_obj = build / "m4_bench.o"
-    board_inc = f"-I{BOARD}"
-    run([CC, *FLAGS, *inc, board_inc, "-c", str(ROOT / "bench" / "m4" / "m4_bench.c"), "-o", str(bench_obj)])
+    bench_src = ROOT / "bench" / "m4" / "m4_bench.c"
+    run([CC, *FLAGS, *inc, f"-I{BOARD}", "-c", str(bench_src), "-o", str(bench_obj)])
     elf = build / "m4_bench.elf"
     link(elf, bench_obj)
     try:
