@@ -29,6 +29,9 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+# QEMU's mps2-an386: the linker script, start-up code and board.h that the
+# firmware programs use too
+BOARD = ROOT / "firmware" / "mps2-an386"
 CC = "arm-none-eabi-gcc"
 SIZE = "arm-none-eabi-size"
 QEMU = "qemu-system-arm"
@@ -49,7 +52,7 @@ LINK = [
     "-nostdlib",
     "-nostartfiles",
     "-Wl,--gc-sections",
-    f"-T{ROOT / 'bench' / 'm4' / 'mps2_an386.ld'}",
+    f"-T{BOARD / 'mps2_an386.ld'}",
 ]
 
 # Programs that pull in one model each (err may be NULL; step once on zeros).
@@ -150,7 +153,7 @@ def measure(build: Path) -> dict:
     print(f"  {'total':16s} {total['text']:6d} {total['data']:5d} {total['bss']:5d}")
 
     startup = build / "startup.o"
-    run([CC, *FLAGS, "-c", str(ROOT / "bench" / "m4" / "startup.c"), "-o", str(startup)])
+    run([CC, *FLAGS, "-c", str(BOARD / "startup.c"), "-o", str(startup)])
 
     def link(elf: Path, main_file: Path) -> None:
         """An image of main_file (C source or object), the start-up code and the core."""
@@ -189,7 +192,8 @@ def measure(build: Path) -> dict:
         print("m4_bench.py: qemu-system-arm not found; no instruction counts", file=sys.stderr)
         return out
     bench_obj = build / "m4_bench.o"
-    run([CC, *FLAGS, *inc, "-c", str(ROOT / "bench" / "m4" / "m4_bench.c"), "-o", str(bench_obj)])
+    bench_src = ROOT / "bench" / "m4" / "m4_bench.c"
+    run([CC, *FLAGS, *inc, f"-I{BOARD}", "-c", str(bench_src), "-o", str(bench_obj)])
     elf = build / "m4_bench.elf"
     link(elf, bench_obj)
     try:

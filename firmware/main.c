@@ -15,7 +15,7 @@
 #include "scenarios.h"
 
 #ifdef FW_TARGET
-#include "platform.h"
+#include "board.h" /* mps2-an386/: the instruction counter */
 #endif
 
 #ifdef GS_SINGLE_PRECISION
@@ -76,17 +76,17 @@ static void report_cost(const fw_scenario *s, const gs_rig_consts *consts, gs_ri
     gs_rig_info info;
     gs_rig_get_info(consts, &info);
     gs_rig_reset(consts, state);
-    const uint64_t t0 = fw_instructions();
+    const uint64_t t0 = board_instructions();
     for (int k = 0; k < s->steps; ++k) {
         s->input(k, &in);
         gs_rig_step(consts, state, &in, &out);
     }
-    const uint64_t t1 = fw_instructions();
+    const uint64_t t1 = board_instructions();
     for (int k = 0; k < s->steps; ++k) {
         s->input(k, &in);
         __asm volatile("" : : "r"(&in) : "memory");
     }
-    const uint64_t t2 = fw_instructions();
+    const uint64_t t2 = board_instructions();
     const uint64_t step_total = (t1 - t0) - (t2 - t1);
     printf("# cost %s %" PRIu32 " instructions/step (QEMU -icount, %d steps, %d contact sub-steps)\n",
            s->name, (uint32_t)(step_total / (uint64_t)s->steps), s->steps,
@@ -131,10 +131,10 @@ static int run(const fw_scenario *s)
 int main(void)
 {
 #ifdef FW_TARGET
-    fw_platform_init();
+    board_counter_start();
     printf("# target Cortex-M4F (QEMU mps2-an386), precision " PRECISION "\n");
     printf("# calibration %" PRIu32 " instructions counted for 200000 known\n",
-           (uint32_t)fw_calibrate(100000U));
+           (uint32_t)board_calibrate(100000U));
 #endif
     /* Layout: informational only. RAM per rig instance is gs_rig_state; the
      * constants (gs_rig_consts) are read-only after init and may live in

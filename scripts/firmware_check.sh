@@ -12,7 +12,9 @@
 #   4. worst-case stack per public function (-fstack-usage + -fcallgraph-info);
 #   5. the scenario program under QEMU mps2-an386 (wrapped in timeout) against
 #      the host program: every output of every step bit for bit, and the
-#      instructions per step counted by QEMU (-icount).
+#      instructions per step counted by QEMU (-icount);
+#   6. the board's start-up without a C runtime (firmware/board_check.c):
+#      .data, .bss, the counter, and the exit status of a return and a fault.
 # Exits non-zero when a check fails. Environment: FW_STACK_BUDGET (bytes,
 # default 2048), FW_MAX_ULP (allowed QEMU/host difference, default 0),
 # FW_QEMU_TIMEOUT (seconds, default 120), FW_BUILD_DIR (default build/firmware).
@@ -150,9 +152,9 @@ for opt in O2 Os; do
   t1=$(date +%s.%N)
   secs=$(python3 -c "print(f'{$t1-$t0:.1f}')")
   if [ "$rc" = 124 ]; then
-    fail "-$opt: QEMU timed out after ${qemu_timeout}s (a fault hangs the program)"; continue
+    fail "-$opt: QEMU timed out after ${qemu_timeout}s (the program never ended)"; continue
   elif [ "$rc" != 0 ]; then
-    fail "-$opt: QEMU program exited $rc"; tail -5 "$out/qemu-$opt.txt" "$out/qemu-$opt.err"; continue
+    fail "-$opt: QEMU program exited $rc"; tail -n 5 "$out/qemu-$opt.txt" "$out/qemu-$opt.err"; continue
   fi
   pass "-$opt: QEMU run ended normally in ${secs}s: $(grep '^done' "$out/qemu-$opt.txt")"
   grep '^# layout' "$out/qemu-$opt.txt" | sed 's/^# /  target /'
@@ -173,6 +175,21 @@ for opt in O2 Os; do
   else
     sed 's/^/  /' "$out/compare-$opt.txt"; fail "-$opt: QEMU outputs differ from the host"
   fi
+done
+
+section "6. the board's start-up without a C runtime (firmware/mps2-an386)"
+for opt in O2 Os; do
+  for check in return:0 fail:1 fault:1; do
+    name=board_check_${check%%:*} want=${check##*:} rc=0
+    timeout 20 qemu-system-arm -M mps2-an386 -nographic -semihosting -icount shift=0 \
+      -kernel "$out/m4f-$opt/$name.elf" >"$out/$name-$opt.txt" 2>&1 || rc=$?
+    said=$(tr '\n' ' ' <"$out/$name-$opt.txt" | sed 's/ *$//')
+    if [ "$rc" = "$want" ] && { [ "$name" != board_check_return ] || [ "$said" = "board: ok" ]; }; then
+      pass "-$opt: $name: QEMU exit status $rc${said:+ ($said)}"
+    else
+      fail "-$opt: $name: QEMU exit status $rc (want $want; 124: timed out)${said:+: $said}"
+    fi
+  done
 done
 
 section "summary"

@@ -3,29 +3,26 @@
  *
  * With -icount shift=0 QEMU's virtual clock advances exactly 1 ns per guest
  * instruction, so the SysTick counter (clocked from that virtual clock) counts
- * instructions in fixed units. The program calibrates the unit on a loop of
- * known length, then, for every configuration of bench_common.h, sets the rig
- * up and times BENCH_M4_STEPS calls of gs_rig_step (the same loop as the host
- * benchmark: input indexing plus one addition). It prints one line per
- * configuration through semihosting:
- *     <name> <steps> <instructions>
- * and exits. These are instructions, not cycles: QEMU does not model the
- * Cortex-M4 pipeline (a float divide is 14 cycles, a load 2, a taken branch
- * 2-4). bench/m4_bench.py builds, runs and reads this. */
+ * instructions in fixed units (the board's counter, firmware/mps2-an386/
+ * board.h). The program calibrates the unit on a loop of known length, then,
+ * for every configuration of bench_common.h, sets the rig up and times
+ * BENCH_M4_STEPS calls of gs_rig_step (the same loop as the host benchmark:
+ * input indexing plus one addition). It prints one line per configuration
+ * through semihosting:
+ *     <name> <steps> <SysTick ticks>
+ * and returns, which ends QEMU (the board's start-up). These are
+ * instructions, not cycles: QEMU does not model the Cortex-M4 pipeline (a
+ * float divide is 14 cycles, a load 2, a taken branch 2-4).
+ * bench/m4_bench.py builds, runs and reads this. */
 #include <stdint.h>
 
 #include "../bench_common.h"
+#include "board.h"
 
 #ifndef BENCH_M4_STEPS
 #define BENCH_M4_STEPS 8000
 #endif
 
-#define SYST_CSR (*(volatile uint32_t *)0xE000E010u)
-#define SYST_RVR (*(volatile uint32_t *)0xE000E014u)
-#define SYST_CVR (*(volatile uint32_t *)0xE000E018u)
-#define SYST_MASK 0x00FFFFFFu
-
-void bench_exit(int code);
 void *memset(void *dst, int c, size_t n);
 void *memcpy(void *dst, const void *src, size_t n);
 
@@ -52,14 +49,6 @@ void *memcpy(void *dst, const void *src, size_t n)
         *d++ = *s++;
     }
     return dst;
-}
-
-/* Semihosting SYS_WRITE0: a NUL-terminated string to the host's stdout. */
-static void put_string(const char *s)
-{
-    register uint32_t r0 __asm__("r0") = 0x04u;
-    register const char *r1 __asm__("r1") = s;
-    __asm__ volatile("bkpt 0xab" : "+r"(r0) : "r"(r1) : "memory");
 }
 
 static char *append_u32(char *p, uint32_t v)
@@ -94,34 +83,39 @@ static void print_line(const char *name, uint32_t a, uint32_t b)
     p = append_u32(p, b);
     *p++ = '\n';
     *p = '\0';
-    put_string(line);
+    board_write0(line);
 }
 
-static uint32_t ticks_since(uint32_t start)
+/* The SysTick ticks of an instruction count of the board's counter (a whole
+ * number of ticks; a run here is far below 2^32 instructions). */
+static uint32_t ticks_of(uint64_t instructions)
 {
-    return (start - SYST_CVR) & SYST_MASK;
+    return (uint32_t)instructions / BOARD_INSN_PER_TICK;
 }
 
-/* 2*n + a few instructions: subs + bne per iteration. */
-static void known_loop(uint32_t n)
+/* Ticks of a loop of 2*n instructions (2*n a multiple of BOARD_INSN_PER_TICK):
+ * the fewest of a few readings. A reading is one tick more when the loop
+ * starts late enough in a tick for the counter read to cross a tick edge;
+ * the start moves between readings, so the fewest does not depend on it, and
+ * two loops measured so differ by exactly their difference in length. */
+static uint32_t loop_ticks(uint32_t n)
 {
-    __asm__ volatile("1: subs %0, %0, #1\n\tbne 1b" : "+r"(n) : : "cc");
+    uint64_t fewest = board_calibrate(n);
+    for (int i = 1; i < 8; ++i) {
+        const uint64_t counted = board_calibrate(n);
+        if (counted < fewest) {
+            fewest = counted;
+        }
+    }
+    return ticks_of(fewest);
 }
 
 int main(void)
 {
-    SYST_RVR = SYST_MASK;
-    SYST_CVR = 0u;
-    SYST_CSR = 0x5u; /* enable, processor clock, no interrupt */
+    board_counter_start();
 
-    /* calibration: ticks of 2e6 more instructions */
-    uint32_t t0 = SYST_CVR;
-    known_loop(1000u);
-    const uint32_t short_ticks = ticks_since(t0);
-    t0 = SYST_CVR;
-    known_loop(1001000u);
-    const uint32_t long_ticks = ticks_since(t0);
-    print_line("calibration_ticks_per_2000000_instructions", long_ticks - short_ticks, 0u);
+    /* calibration: ticks of 2e6 more instructions (subs + bne per iteration) */
+    print_line("calibration_ticks_per_2000000_instructions", loop_ticks(1001000u) - loop_ticks(1000u), 0u);
 
     for (size_t c = 0; c < N_CONFIGS; ++c) {
         gs_error err;
@@ -131,7 +125,7 @@ int main(void)
         gs_rig_output out;
         float acc = 0.0f;
         uint32_t k = 0;
-        const uint32_t start = SYST_CVR;
+        const uint64_t start = board_instructions();
         for (uint32_t i = 0; i < BENCH_M4_STEPS; ++i) {
             gs_rig_step(&g_consts, &g_state, &g_inputs[k], &out);
             acc += out.base_torque;
@@ -139,7 +133,7 @@ int main(void)
                 k = 0;
             }
         }
-        const uint32_t ticks = ticks_since(start);
+        const uint32_t ticks = ticks_of(board_instructions() - start);
         g_sink = acc;
         print_line(CONFIGS[c].name, BENCH_M4_STEPS, ticks);
     }
