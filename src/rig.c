@@ -22,6 +22,7 @@
 #include "blocks.h"
 #include "gs_math.h"
 #include "mesh.h"
+#include "regularised_friction.h"
 #include "validate.h"
 
 #define LINEARISATION_PASSES 2
@@ -40,6 +41,8 @@ typedef struct {
     gs_real driven_inertia;
     gs_real load_coulomb;
     gs_real inv_load_speed_threshold;
+    int friction_regularised;      /* a free driven side's friction is F(v)*tanh(4 v/v_th) */
+    int speed_ramp;                /* speed-driven rigid rig: torques at the step's mean speed */
     gs_real load_offset;
     gs_real inv_thermal_resistance;
     gs_real accel_gain;            /* dt/(tau + dt) */
@@ -109,6 +112,8 @@ gs_rig_params gs_rig_params_default(void)
         p.ripple_mesh_phase_rad[i] = GS_R(0.0);
     }
     p.ripple_mesh_teeth = 0;
+    p.load_friction_regularised = 0;
+    p.base_speed_ramp = 0;
     return p;
 }
 
@@ -129,8 +134,9 @@ static gs_status check_stribeck(const gs_rig_params *p, gs_error *err)
     return gs_check_invertible(err, p->load_stribeck_speed * p->load_stribeck_speed, "load_stribeck_speed");
 }
 
-/* Compliance: the spring needs a base gear of its own (base_inertia > 0) that
- * only a speed-driven base on a rigid mesh provides in this version. */
+/* Compliance: the spring turns a base gear of its own (base_inertia >= 0; 0
+ * puts the spring at the mesh) that only a speed-driven base on a rigid mesh
+ * provides in this version. */
 static gs_status check_compliance(const gs_rig_params *p, int backlash, gs_error *err)
 {
     gs_status s;
@@ -142,7 +148,7 @@ static gs_status check_compliance(const gs_rig_params *p, int backlash, gs_error
     if (p->base_drive != GS_BASE_SPEED_DRIVEN || backlash) {
         return gs_fail(err, GS_E_COMBINATION, "compliance_stiffness");
     }
-    return gs_check_invertible(err, p->base_inertia_kg_m2, "base_inertia");
+    return GS_OK; /* base_inertia >= 0: checked with the drive; 0 puts the spring at the mesh */
 }
 
 static gs_status check_ripple(const gs_rig_params *p, gs_error *err)
@@ -344,6 +350,8 @@ static void rig_fill(rig_consts_ *r, const gs_rig_params *p)
     r->driven_inertia = p->driven_inertia;
     r->load_coulomb = p->load_coulomb_friction;
     r->inv_load_speed_threshold = GS_R(1.0) / p->load_coulomb_speed_threshold;
+    r->friction_regularised = p->load_friction_regularised != 0;
+    r->speed_ramp = p->base_speed_ramp != 0;
     r->load_offset = p->load_offset;
     r->inv_thermal_resistance = p->heat_path ? GS_R(1.0) / p->thermal_resistance_K_W : GS_R(0.0);
     r->temperature_source = p->temperature_source;
@@ -505,10 +513,11 @@ static gs_real friction_project(gs_real w_free, gs_real bound)
 }
 
 static void rigid_speed_driven(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
-                               gs_rig_output *out)
+                               gs_real w_prev, gs_rig_output *out)
 {
     const gs_mesh_ *m = &r->mesh;
-    const gs_real w_b = in->base_speed;
+    /* the step's mean speed under a linear ramp, or this sample */
+    const gs_real w_b = r->speed_ramp ? GS_R(0.5) * (w_prev + in->base_speed) : in->base_speed;
     const gs_real alpha_b = st->base_acceleration;
     const gs_real w_f = m->inv_ratio * w_b;
     const gs_real a_f = m->inv_ratio * alpha_b;
@@ -549,6 +558,9 @@ static geared_base_end geared_base_step(const rig_consts_ *r, const gs_loss_ctx_
     const gs_real a = m->inv_ratio;
     /* the friction level at the start speed (Stribeck: explicit in the speed) */
     const gs_real level = friction_level(r, a * w);
+    /* regularised: the friction is a damper taken at the start speed, never a bound */
+    const gs_real creep = r->friction_regularised ? gs_creep_damping(level, a * w, r->inv_load_speed_threshold)
+                                                  : GS_R(0.0);
     geared_base_end e = {w, GS_R(0.0), t_f};
     for (int pass = 0; pass < LINEARISATION_PASSES; ++pass) {
         /* tau_mesh ~ m0 + m1*T_F; J_B dw/h = drive - mu_B w' - a (tau_mesh - T_F) with
@@ -560,15 +572,15 @@ static geared_base_end geared_base_step(const rig_consts_ *r, const gs_loss_ctx_
         gs_real m1;
         gs_mesh_loss_linearize(m, ctx, e.t_f, a * e.w, &m0, &m1);
         const gs_real q = a * gs_max(GS_R(1.0) - m1, GS_R(0.0));
-        const gs_real visc = m->mu_base + q * m->mu_follower * a + drive_slope;
+        const gs_real visc = m->mu_base + q * (m->mu_follower + creep) * a + drive_slope;
         const gs_real denominator = (r->base_inertia + q * a * r->driven_inertia) / h + visc;
         const gs_real w_free = w + (drive - a * m0 + q * push - visc * w) / denominator;
-        const gs_real bound = gs_abs(q) * level / denominator;
+        const gs_real bound = r->friction_regularised ? GS_R(0.0) : gs_abs(q) * level / denominator;
         e.w = friction_project(w_free, bound);
         e.dw = e.w - w;
         /* the Coulomb torque that gives w_next: -F_C*sign(w_F) sliding, what holds it at rest */
         const gs_real coulomb = bound > GS_R(0.0) ? (e.w - w_free) * denominator / q : GS_R(0.0);
-        e.t_f = push + coulomb - r->driven_inertia * a * e.dw / h - m->mu_follower * a * e.w;
+        e.t_f = push + coulomb - creep * a * e.w - r->driven_inertia * a * e.dw / h - m->mu_follower * a * e.w;
     }
     return e;
 }
@@ -808,7 +820,14 @@ static void backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
         const gs_real tau_law = gs_mesh_loss_from_tooth(m, ctx, t_f0, w_f, st->block.follower_torque);
         st->block.follower_torque = t_f0 + tau_law;
         const gs_real mesh_friction = tau_law * w_f > GS_R(0.0) ? gs_abs(tau_law) : GS_R(0.0);
-        const gs_real bound = friction_level(r, w_f) + mesh_friction;
+        gs_real momentum = r->driven_inertia * w_f + h * push;
+        gs_real bound = mesh_friction;
+        if (r->friction_regularised) { /* a damper on the free motion, before the contact */
+            const gs_real c = gs_creep_damping(friction_level(r, w_f), w_f, r->inv_load_speed_threshold);
+            momentum += h * gs_creep_torque(c, momentum, r->driven_inertia + h * m->mu_follower, h);
+        } else {
+            bound += friction_level(r, w_f);
+        }
         /* the held speed ramps linearly from the last sample to this one */
         gs_real w_b_free =
             speed_driven ? w_b_start + (in->base_speed - w_b_start) * ((gs_real)(k + 1) * r->inv_substeps)
@@ -824,8 +843,7 @@ static void backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
             }
         }
         gs_real friction;
-        const substep_end e = substep_with_friction(r, st, w_b_free, r->driven_inertia * w_f + h * push, bound,
-                                                    &friction);
+        const substep_end e = substep_with_friction(r, st, w_b_free, momentum, bound, &friction);
         /* the meshing loss's share of the friction (it acts on the follower as -tau_mesh) */
         const gs_real tau_mesh = bound > GS_R(0.0) ? -friction * (mesh_friction / bound) : GS_R(0.0);
         /* x moves with the relative speed the contact was solved for: the end
@@ -895,12 +913,16 @@ void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *st, const gs_rig_inp
         compliant_step(r, st, &ctx, in, w_drive_start, out);
     } else {
         if (r->base_drive == GS_BASE_SPEED_DRIVEN) {
-            rigid_speed_driven(r, st, &ctx, in, out);
+            rigid_speed_driven(r, st, &ctx, in, w_drive_start, out);
         } else {
             rigid_torque_driven(r, st, &ctx, in, out);
         }
         st->base_angle += r->dt * st->base_speed;
         st->follower_position += r->dt * st->follower_speed;
+        if (r->speed_ramp && r->base_drive == GS_BASE_SPEED_DRIVEN) { /* the speeds reported: at the step's end */
+            st->base_speed = in->base_speed;
+            st->follower_speed = m->inv_ratio * in->base_speed;
+        }
     }
     if (from_input) {
         st->block.temperature = in->measured_temperature;

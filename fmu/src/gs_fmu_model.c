@@ -264,8 +264,8 @@ static const entry rig_entries[] = {
      .description = "Stribeck speed v_S: F_C + (F_brk - F_C)*exp(-(v/v_S)^2) (> 0)", .rack_unit = "m/s"},
     /* Compliance changes the rig's degrees of freedom: fixed */
     REAL_(gs_rig_params, "compliance_stiffness", compliance_stiffness_Nm_rad, FIXED, "N.m/rad",
-          "torsional stiffness of the base shaft, drive to base gear (0 = rigid; else base_inertia > 0, "
-          "speed-driven base, no backlash)"),
+          "torsional stiffness of the base shaft, drive to base gear (0 = rigid; speed-driven base, "
+          "no backlash; with base_inertia 0 the spring acts at the mesh)"),
     REAL_(gs_rig_params, "compliance_damping", compliance_damping_Nm_s_rad, FIXED, "N.m.s/rad",
           "torsional damping of the base shaft (>= 0)"),
     /* Torque ripple on the base side: sum A_i*cos(i*theta_B + phi_i) + sum M_j*cos(j*Z*theta_B + psi_j) */
@@ -289,6 +289,11 @@ static const entry rig_entries[] = {
      .offset = offsetof(gs_rig_params, ripple_mesh_teeth),
      .description = "teeth Z of the base gear per revolution (>= 1 when a ripple_mesh_amplitude > 0)",
      .rack_description = "teeth Z of the pinion per revolution (>= 1 when a ripple_mesh_amplitude > 0)"},
+    BOOL_(gs_rig_params, "load_friction_regularised", load_friction_regularised,
+          "true: a freely moving driven side's friction is F*tanh(4 v/load_coulomb_speed_threshold) "
+          "(it creeps, no stiction); false: the set-valued Coulomb law"),
+    BOOL_(gs_rig_params, "base_speed_ramp", base_speed_ramp,
+          "speed-driven rigid mesh, true: the speed terms at the step's mean speed (the inputs' linear ramp)"),
 };
 
 static const entry gear_entries[] = {

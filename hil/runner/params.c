@@ -129,6 +129,8 @@ static const field_spec rig_fields[] = {
     REALS("rig.", gs_rig_params, ripple_mesh_amplitude_Nm, GS_RIPPLE_HARMONICS),
     REALS("rig.", gs_rig_params, ripple_mesh_phase_rad, GS_RIPPLE_HARMONICS),
     INT("rig.", gs_rig_params, ripple_mesh_teeth),
+    INT("rig.", gs_rig_params, load_friction_regularised),
+    INT("rig.", gs_rig_params, base_speed_ramp),
 };
 
 static const field_spec run_fields[] = {

@@ -27,8 +27,11 @@
  * rest up to the breakaway level), a compliant base shaft (spring and damper
  * from the drive to the base gear, which turns with base_inertia; speed-driven
  * base and rigid mesh only; base_torque is then the shaft torque and
- * base_speed/base_angle the base gear's), and a torque ripple on the base
- * side, periodic in the base angle per revolution and per tooth.
+ * base_speed/base_angle the base gear's; with base_inertia 0 the spring acts
+ * at the mesh), and a torque ripple on the base side, periodic in the base
+ * angle per revolution and per tooth. Two switches, also off by default:
+ * a regularised (creeping) friction on a freely moving driven side, and the
+ * step-mean speed of the speed-driven rigid rig.
  */
 #ifndef GEARSIM_RIG_H
 #define GEARSIM_RIG_H
@@ -85,7 +88,8 @@ typedef struct {
     gs_real load_breakaway_friction;       /* F_brk, N*m or N: 0 (default) = none, else >= load_coulomb_friction */
     gs_real load_stribeck_speed;           /* v_S, rad/s or m/s (> 0 with a breakaway friction), default 0.01 */
     /* Compliance: a torsional spring and damper between the drive and the
-     * base gear, which then turns on its own with base_inertia (> 0).
+     * base gear, which then turns on its own with base_inertia (>= 0; 0: the
+     * spring acts at the mesh, the driven side behind it turning alone).
      * Speed-driven base and rigid mesh only. */
     gs_real compliance_stiffness_Nm_rad;   /* k (>= 0), 0 (default) = rigid shaft */
     gs_real compliance_damping_Nm_s_rad;   /* c (>= 0), default 0 */
@@ -96,6 +100,19 @@ typedef struct {
     gs_real ripple_mesh_amplitude_Nm[GS_RIPPLE_HARMONICS];       /* M_j (>= 0), default 0 */
     gs_real ripple_mesh_phase_rad[GS_RIPPLE_HARMONICS];          /* psi_j (finite), default 0 */
     int ripple_mesh_teeth;                 /* Z: teeth of the base gear or pinion (>= 1 when a M_j > 0), default 0 */
+    /* Regularised driven-side friction (physics.md 11): nonzero makes the
+     * friction of a freely moving driven side (torque-driven rigid rig,
+     * backlash and compliant sub-steps) the smooth law of the speed-driven
+     * rigid rig, F(v)*tanh(4 v/load_coulomb_speed_threshold): no stiction, a
+     * damper F/(v_th/4) near rest, so the driven side creeps under any load.
+     * 0 (default): the set-valued Coulomb law. */
+    int load_friction_regularised;
+    /* Speed-driven rigid mesh: nonzero evaluates the speed-dependent torques
+     * at the step's mean speed (the last and this sample averaged: the linear
+     * ramp the backlash and compliant rigs always follow), so that every
+     * output torque is a mean over the step like theirs. 0 (default): at
+     * this sample. */
+    int base_speed_ramp;
 } gs_rig_params;
 
 /* Per-step inputs and outputs (gearsim/fields.h: names, units, docs). All
@@ -138,9 +155,9 @@ GS_API extern const gs_field_info gs_rig_state_info[GS_RIG_STATE_FIELDS];
  * part of the ABI (GS_RIG_CONSTS_REALS reals; on targets that pack enums the
  * internal layout uses a few bytes less). */
 #ifdef GS_SINGLE_PRECISION
-#define GS_RIG_CONSTS_REALS 211
+#define GS_RIG_CONSTS_REALS 213
 #else
-#define GS_RIG_CONSTS_REALS 203
+#define GS_RIG_CONSTS_REALS 204
 #endif
 typedef struct {
     gs_real opaque_[GS_RIG_CONSTS_REALS];

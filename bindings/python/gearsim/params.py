@@ -394,6 +394,7 @@ def _rig_params(
         *_stribeck(load_unit, speed_unit),
         *_COMPLIANCE,
         *_RIPPLE,
+        *_SWITCHES,
     )
 
 
@@ -425,7 +426,8 @@ _COMPLIANCE = (
         REAL,
         "N*m/rad",
         "compliance_stiffness_Nm_rad",
-        doc="torsional stiffness of the base shaft, drive to base gear; 0 = rigid",
+        doc="torsional stiffness of the base shaft, drive to base gear (with base_inertia 0: "
+        "at the mesh); 0 = rigid",
     ),
     Param(
         "compliance_damping",
@@ -470,6 +472,25 @@ _RIPPLE = (
         INT,
         field="ripple_mesh_teeth",
         doc="teeth of the base gear (pinion) per revolution; >= 1 with a mesh ripple",
+    ),
+)
+
+
+# Two switches of the rig's numerics (physics.md 11), both off by default.
+_SWITCHES = (
+    Param(
+        "load_friction_regularised",
+        BOOL,
+        field="load_friction_regularised",
+        doc="a freely moving driven side's friction is F*tanh(4 v/load_coulomb_speed_threshold) "
+        "(creeps, no stiction) instead of the set-valued Coulomb law",
+    ),
+    Param(
+        "base_speed_ramp",
+        BOOL,
+        field="base_speed_ramp",
+        doc="speed-driven rigid mesh: speed terms at the step's mean speed (the samples' linear "
+        "ramp), so every torque is a step mean",
     ),
 )
 
