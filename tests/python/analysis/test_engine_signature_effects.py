@@ -14,13 +14,10 @@ from analysis_helpers import RIGS, base_model, measurement
 from gearsim.analysis import compare, fit
 from gearsim.analysis import modelkit as mk
 from gearsim.analysis.measurement import Measurement
-from gearsim.analysis.signatures import (
-    angle_harmonics,
-    base_angle,
-    delay_signature,
-    resonance,
-    speed_profile,
-)
+from gearsim.analysis.effects.compliance import resonance
+from gearsim.analysis.effects.sensor_delay import delay_signature
+from gearsim.analysis.effects.stribeck_friction import speed_profile
+from gearsim.analysis.effects.torque_ripple import angle_harmonics, base_angle
 from gearsim.errors import ModelFileError
 
 DT = 1e-3

@@ -30,7 +30,7 @@ from typing import Any
 
 from . import scoring
 from .compare import CompareResult, compare
-from .effects import Effect, applicable_effects, coestimated, nuisance_columns
+from .effects import Effect, Screening, applicable_effects, coestimated, nuisance_columns
 from .fitting import FitResult, fit_effect
 from .identifiability import tie_warning
 from .measurement import Measurement
@@ -174,7 +174,7 @@ class DiagnoseResult:
 @dataclass
 class _Screened:
     effect: Effect
-    result: Any
+    result: Screening
     predicted: float
     evidence: dict[str, Any]
     ruled_out: str | None
@@ -185,12 +185,12 @@ def _screen_all(ctx: Context, effects: list[Effect], nuisance_nrmse: float) -> l
     out = []
     for eff in effects:
         sr = eff.screen(ctx)
-        why = eff.ruled_out(ctx, sr)
+        why = sr.ruled_out
         ev = eff.evidence(ctx, sr)
         if why:
             ev["ruled_out"] = why
             ev["text"] = f"{ev.get('text', '')} (not fitted: {why})".strip()
-        pred = nuisance_nrmse if why else eff.predicted_nrmse(ctx, sr)
+        pred = nuisance_nrmse if why else float(sr.predicted_nrmse)
         out.append(_Screened(eff, sr, pred, ev, why))
     return sorted(out, key=lambda s: s.predicted)
 
@@ -308,7 +308,8 @@ def _screening_candidate(ctx: Context, s: _Screened, split: scoring.ValidationSp
     """A candidate judged on screening alone: its errors and score are
     estimates from the linear regression, not from a simulation."""
     torque, speed = ctx.torque_output, ctx.speed_output
-    tn = getattr(s.result, "torque_nrmse", ctx.base_nrmse[torque])
+    reg = s.result.regression
+    tn = reg.torque_nrmse if reg is not None else ctx.base_nrmse[torque]
     mse = {
         torque: float(tn) ** 2,
         speed: scoring.normalized_mse(ctx.residual[speed], ctx.std[speed], split.validation),

@@ -39,7 +39,7 @@ import numpy as np
 
 from . import modelkit as mk
 from . import scoring
-from .effects import EFFECTS, Effect, FitParam, build_changes, coestimated, get_effect
+from .effects import EFFECTS, Effect, FitParam, Screening, build_changes, coestimated, get_effect
 from .identifiability import correlation_matrix, parameter_warnings, warning
 from .measurement import Measurement
 from .metrics import OutputMetrics, output_metrics
@@ -139,7 +139,7 @@ class FitResult:
         }
 
 
-def screen_effect(ctx: Context, effect: Effect) -> Any:
+def screen_effect(ctx: Context, effect: Effect) -> Screening:
     """Screening of one effect on the baseline residual (seeds and evidence)."""
     return effect.screen(ctx)
 
