@@ -339,9 +339,13 @@ def _print_regimes(res) -> None:
     from .regimes import FAILING_RATIO
 
     outs = list(res.outputs)
+    floors = ", ".join(
+        f"{o} {_g(res.regimes[0]['outputs'][o].get('noise_floor', float('nan')))}" for o in outs
+    )
     print(
         "\nerror by regime (rms residual in the regime / std of the output; x = ratio to "
-        f"overall; a regime fails at >= {FAILING_RATIO:g}x):"
+        f"overall; a regime fails at >= {FAILING_RATIO:g}x and >= {FAILING_RATIO:g}x the noise "
+        f"floor: {floors}):"
     )
     print(f"{'regime':20s} {'share':>6s} " + " ".join(f"{o:>22s}" for o in outs))
     for r in res.regimes:
@@ -467,31 +471,39 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
     from .effects import EFFECT_NAMES
 
     _common(p)
-    p.add_argument(
+    what = p.add_mutually_exclusive_group(required=True)
+    what.add_argument(
         "--add",
-        required=True,
         metavar="EFFECT",
         help=f"effect to add: {', '.join(EFFECT_NAMES)}",
+    )
+    what.add_argument(
+        "--refit",
+        action="store_true",
+        help="add nothing: re-fit together every effect the model has (the final round after "
+        "adding them one at a time)",
     )
     p.add_argument(
         "--out",
         metavar="NEW.toml",
-        help="write the model with the effect added and fitted (atomically, after the fit; "
-        "never over DATA.csv or MODEL.toml)",
+        help="write the model with the effect added and fitted, or re-fitted (atomically, after "
+        "the fit, also when it is not accepted; never over DATA.csv or MODEL.toml)",
     )
     _validation_args(p)
     p.add_argument(
         "--max-samples",
         type=_count(1),
         metavar="N",
-        help="fit on the first N samples only, at least 200 (errors are still reported on all)",
+        help="use at most N residual samples per fit, spread evenly over the whole record "
+        "(default 40000; the simulation always runs over all of it)",
     )
 
 
 def _print_fit(res) -> None:
     print(
         f"effect {res.effect}: nrmse {res.nrmse_before:.4f} -> {res.nrmse_after:.4f} "
-        f"({res.evaluations} simulations, {res.seconds:.1f} s, {res.fit_samples} samples)"
+        f"({res.evaluations} simulations, {res.seconds:.1f} s, {res.fit_samples} samples, "
+        f"{res.fit_points} residual points spread over them)"
     )
     print(f"{'parameter':28s} {'value':>12s} {'std':>10s} {'before':>12s}  role")
     for f in res.fitted:
@@ -509,10 +521,22 @@ def _print_fit(res) -> None:
     _print_warnings(res.warnings)
     for n in res.notes:
         print(f"note: {n}")
+    print(res.verdict)
+
+
+def _refit_check(model: Any) -> None:
+    from .effects import present_effects
+    from .errors import EffectError
+
+    if not present_effects(model):
+        raise EffectError(
+            "--refit: the model has no effect of docs/measurement-format.md section 3 to re-fit",
+            parameter="--refit",
+        )
 
 
 def _fit(args: argparse.Namespace) -> int:
-    from . import fit
+    from . import fit, refit
     from .effects import get_effect
 
     if args.out is not None:
@@ -520,16 +544,29 @@ def _fit(args: argparse.Namespace) -> int:
     say = _progress(args)
     filt = _input_filter(args.input_filter)
     # an unknown / inapplicable effect: exit 2 before any work
-    model, meas = _load(args, filt, check=lambda m: get_effect(args.add, m))
-    res = fit(
-        model,
-        meas,
-        args.add,
-        input_filter=filt,
-        max_samples=args.max_samples,
-        progress=say,
-        **_validation(args),
-    )
+    check = _refit_check if args.refit else (lambda m: get_effect(args.add, m))
+    model, meas = _load(args, filt, check=check)
+    if args.refit:
+        res = refit(
+            model,
+            meas,
+            input_filter=filt,
+            max_samples=args.max_samples,
+            progress=say,
+            **_validation(args),
+        )
+    else:
+        res = fit(
+            model,
+            meas,
+            args.add,
+            input_filter=filt,
+            max_samples=args.max_samples,
+            progress=say,
+            **_validation(args),
+        )
+    if not res.accepted:  # one line, whatever the output format
+        print(f"gearsim fit: {res.verdict}", file=sys.stderr)
     if args.out is not None:
         _write_model_atomic(res.model, args.out)
         say(f"wrote {printable(args.out, limit=200)}")
@@ -571,11 +608,11 @@ def _report_args(p: argparse.ArgumentParser) -> None:
 
 
 def _report(args: argparse.Namespace) -> int:
-    from .report import FIGURES, run_rounds, write_report
+    from .report import FIGURES, conclusion, run_rounds, write_report
 
     files = [f"{name}.png" for name in FIGURES] + ["report.html"]
     if args.save_models:
-        files += [f"model-round-{i}.toml" for i in range(args.rounds + 1)]
+        files += [f"model-round-{i}.toml" for i in range(args.rounds + 2)]
     _check_out(args, directory=True, files=files)  # before anything is read
     say = _progress(args)
     filt = _input_filter(args.input_filter)
@@ -607,7 +644,7 @@ def _report(args: argparse.Namespace) -> int:
             }
             for i, r in enumerate(rounds)
         ],
-        "conclusion": rounds[-1].diagnosis.conclusion if rounds[-1].diagnosis else None,
+        "conclusion": conclusion(rounds),
     }
     if args.json:
         _emit_json(summary)

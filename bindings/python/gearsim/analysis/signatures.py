@@ -79,6 +79,7 @@ class Context:
     regimes: list[Regime]
     idx: np.ndarray  # samples used by the regressions
     columns: dict[str, np.ndarray] = field(default_factory=dict)
+    speed_resolution: float = 0.0  # driven-speed units: SPEED_RESOLUTION of the robust maximum
 
     @property
     def torque_output(self) -> str:
@@ -106,6 +107,12 @@ class Context:
     def overall_nrmse(self, torque_nrmse: float, speed_nrmse: float | None = None) -> float:
         s = self.base_nrmse[self.speed_output] if speed_nrmse is None else speed_nrmse
         return 0.5 * (torque_nrmse + s)
+
+
+#: the driven speed a record resolves, as a fraction of its robust maximum: a
+#: friction reversing over a narrower band reverses where input noise and
+#: quantization put the zero crossing
+SPEED_RESOLUTION = 0.005
 
 
 def _sgn(x: np.ndarray, threshold: float) -> np.ndarray:
@@ -170,10 +177,11 @@ def build_context(
     rig = mk.rig_values(model)
     blk = mk.block_values(model)
     vmax = float(np.percentile(np.abs(v), 99)) or 1.0
+    ctx.speed_resolution = SPEED_RESOLUTION * vmax
     vth = float(rig.get("load_coulomb_speed_threshold", 1e-3))
     # smoothing of the sign: the model's threshold, but never sharper than the
     # speed resolution of the data (0.5 % of the speed range)
-    sgn = _sgn(v, max(vth, 0.005 * vmax))
+    sgn = _sgn(v, max(vth, ctx.speed_resolution))
     mesh = np.abs(T) * sgn
     ctx.columns = {
         "acceleration": a,
@@ -181,7 +189,7 @@ def build_context(
         "sign": sgn,
         "constant": -np.ones(n),
         "mesh": mesh,
-        "idle": _sgn(v, max(float(blk.get("speed_threshold", 0.01)), 0.005 * vmax)),
+        "idle": _sgn(v, max(float(blk.get("speed_threshold", 0.01)), ctx.speed_resolution)),
     }
     return ctx
 
@@ -275,5 +283,8 @@ def parabolic_peak(y: np.ndarray, i: int) -> tuple[float, float]:
     den = a - 2.0 * b + c
     if den == 0.0:
         return float(i), b
-    off = 0.5 * (a - c) / den
+    # within half a sample of i: at a local extremum the vertex is there; an
+    # i that is not one (the edge of a searched band) must not send the
+    # vertex off the grid (a peak above the Nyquist frequency)
+    off = min(max(0.5 * (a - c) / den, -0.5), 0.5)
     return i + off, b - 0.25 * (a - c) * off

@@ -20,8 +20,11 @@ effect, so that diagnose, fitting and report never test an effect's name:
   trades off against it, and their screening columns;
 - ``build(ctx, values)``: the block and rig changes for parameter values;
 - ``report(model)``: how its fitted parameters are reported;
-- ``evidence(ctx, screening)``: what the screening saw, with a readable text
-  in which every number is a property of the residual or of the fit;
+- ``evidence(ctx, screening, model)``: what the screening saw, with a
+  readable text; every number in the text is a field of the evidence (a
+  property of the residual), a threshold it names, or a parameter of the
+  fitted model (when ``model``, the fitted one, is given), and physically
+  possible;
 - ``excitation`` / ``separated_from``: the excitation that tells it apart from
   its look-alikes (identifiability warnings name it);
 - ``negligible(ctx, model)``: why the fitted size is below what the record
@@ -307,6 +310,12 @@ class Effect(ABC):
         None."""
         return None
 
+    def inconsistent(self, ctx: Any, model: Any) -> str | None:
+        """Why the baseline residual contradicts the effect as fitted in
+        `model` (it lowers the error by standing in for another: then it does
+        not help), or None."""
+        return None
+
     # -- when the model already has it
     def coestimated(self, ctx: Any, screening: Screening | None) -> list[FitParam]:
         """Its present parameters, re-estimated when another effect is added."""
@@ -317,42 +326,45 @@ class Effect(ABC):
         return []
 
     # -- evidence
-    def evidence(self, ctx: Any, screening: Screening) -> dict[str, Any]:
+    def evidence(self, ctx: Any, screening: Screening, model: Any = None) -> dict[str, Any]:
         """What the screening saw: partial correlation with the residual, the
         coefficients, the regime where the effect's part is largest, and a
-        readable text."""
+        readable text. model: the model with the effect fitted, when it was
+        (its parameters may then be quoted)."""
         reg = screening.regression
         nn = reg.nuisance
         own = {n: float(c) for n, c in zip(reg.names[nn:], reg.coef[nn:], strict=True)}
         regime, ratio = own_regime(ctx, reg.explained)
-        r = reg.partial_r
+        r = float(reg.partial_r)
         ev: dict[str, Any] = {
             "signature": self.signature_text,
             "correlation": r,
-            "explained_share": reg.r2_gain,
+            "explained_share": float(min(max(reg.r2_gain, 0.0), 1.0)),
             "coefficients": own,
             "regime": regime,
             "regime_ratio": ratio,
         }
-        if own:
-            ev.update(self.evidence_extra(ctx, screening, own))
-        if abs(r) < 0.1 or not np.any(reg.explained):
-            ev["text"] = (
+        ev.update(self.evidence_extra(ctx, screening, own, model))
+        seen = abs(r) >= 0.1 and bool(np.any(reg.explained))
+        text = self.describe(ctx, ev, model) if seen else None
+        if text is None:
+            text = (
                 f"no sign of it in the residual: {self.signature_text} is not seen "
                 f"(partial correlation r = {r:.2f})"
             )
-        else:
-            ev["text"] = self.describe(ctx, screening, own, r, regime)
+        ev["text"] = text
         return ev
 
-    def describe(
-        self, ctx: Any, screening: Screening, own: dict[str, float], r: float, regime: Any
-    ) -> str:
-        return f"{self.signature_text} (r = {r:.2f}); largest in {regime}"
+    def describe(self, ctx: Any, ev: dict[str, Any], model: Any = None) -> str | None:
+        """The evidence text from the evidence fields `ev` (and the fitted
+        model's parameters); None when the fields show no sign of it."""
+        return f"{self.signature_text} (r = {ev['correlation']:.2f}); largest in {ev['regime']}"
 
     def evidence_extra(
-        self, ctx: Any, screening: Screening, own: dict[str, float]
+        self, ctx: Any, screening: Screening, own: dict[str, float], model: Any = None
     ) -> dict[str, Any]:
+        """Fields of the evidence beyond the regression's (own: this effect's
+        coefficients)."""
         return {}
 
     def __repr__(self) -> str:

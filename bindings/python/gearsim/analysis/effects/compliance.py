@@ -1,7 +1,19 @@
 """Compliance between the drive and the driven side (eq. 11.2-11.4): a
 torsional spring-damper from the drive to the base gear, which turns with
-base_inertia. The rigid model's residual then rings at the natural
-frequency: a peak in its spectrum (:func:`resonance`)."""
+base_inertia (0 unless given: the spring then acts at the mesh, a compliant
+mesh). Two signatures in the rigid model's residual:
+
+- it rings at the natural frequency: a peak in its spectrum
+  (:func:`resonance`), when the mode is lightly damped;
+- at each direction reversal the driven side's friction reverses through the
+  spring, so the measured torque reverses later than the rigid model's: the
+  torque residual repeats one transient after every reversal of the driven
+  speed (:func:`reversal_transient`), whether or not the mode rings.
+
+The friction of the driven side behind the spring creeps (rig
+load_friction_regularised): near rest it acts as a damper in series with
+the spring, so its smoothing speed load_coulomb_speed_threshold is fitted
+with the spring when the model has a friction."""
 
 from __future__ import annotations
 
@@ -12,12 +24,13 @@ from typing import Any
 import numpy as np
 
 from .. import modelkit as mk
-from .base import Changes, Effect, FitParam, Screening, rig_has
+from ..regimes import reversal_window, sign_changes
+from .base import Changes, Effect, FitParam, Screening, fmt, rig_has, speed_scale, speed_unit
 
 
 @dataclass(frozen=True)
 class Resonance:
-    """The residual's power spectrum (Welch) and its strongest peak.
+    """The residual's power spectrum (Welch's method) and its strongest peak.
 
     freq_hz, psd: the spectrum; peak_hz: the peak (parabolic interpolation
     on log power); prominence: peak power / median power of the band
@@ -36,14 +49,15 @@ class Resonance:
 def resonance(residual: np.ndarray, dt: float, min_hz: float | None = None) -> Resonance:
     """Spectrum of a residual and its strongest peak above min_hz (default:
     four frequency bins) and below 0.4/dt."""
-    from scipy.signal import welch
-
+    from ..signals import _psd
     from ..signatures import parabolic_peak
 
     r = np.asarray(residual, dtype=float)
     n = r.size
     nper = int(min(n, max(256, 2 ** int(np.log2(max(n // 8, 2))))))
-    f, p = welch(r - r.mean(), fs=1.0 / dt, nperseg=nper, detrend="linear")
+    # Welch's averaged periodogram (Hann, half overlap): only ratios of it
+    # are used, so its scaling does not matter
+    f, p = _psd(r - r.mean(), 1.0 / dt, nseg=nper)
     lo = 4.0 * f[1] if min_hz is None else max(min_hz, f[1])
     band = (f >= lo) & (f <= 0.4 / dt)
     if not band.any() or not np.any(p[band] > 0):
@@ -101,41 +115,129 @@ def band_prominence(res: Resonance) -> float:
 
 
 @dataclass(frozen=True)
+class ReversalTransient:
+    """The driven-side torque residual around reversals of the driven speed.
+
+    reversals: how many; before/after: samples of the window taken before
+    and after each; time_share: share of the record inside the windows;
+    profile: the event-locked mean of the residual times the sign of the new
+    speed (driven units; negative: the measured force reverses later than
+    the model's); explained_share: share of the whole residual's energy
+    that this one transient explains; peak: its largest magnitude (signed);
+    peak_time_s: when it happens after the reversal; half_time_s: how long
+    it stays above half of it."""
+
+    reversals: int
+    before: int
+    after: int
+    time_share: float
+    profile: np.ndarray
+    explained_share: float
+    peak: float
+    peak_time_s: float
+    half_time_s: float
+
+
+def reversal_transient(
+    r_d: np.ndarray, v: np.ndarray, dt: float, total_energy: float | None = None
+) -> ReversalTransient:
+    """The transient the residual r_d repeats after each reversal of the
+    driven speed v: the event-locked mean of sign(new v)*r_d over a window
+    of a quarter of regimes.reversal_window before the reversal to one
+    window after it, and the share of the residual's energy it explains
+    (of total_energy when given: the energy of the residual r_d was cleaned
+    from)."""
+    r = np.asarray(r_d, dtype=float)
+    v = np.asarray(v, dtype=float)
+    band = 0.05 * (float(np.percentile(np.abs(v), 99)) or 1.0)
+    events = sign_changes(v, band)
+    w = reversal_window(events, r.size, dt)
+    before, after = max(1, w // 4), w
+    keep = events[(events >= before) & (events + after <= r.size)]
+    empty = ReversalTransient(int(keep.size), before, after, 0.0, np.zeros(0), 0.0, 0.0, 0.0, 0.0)
+    total = float(np.sum(r * r)) if total_energy is None else float(total_energy)
+    if keep.size < 3 or total <= 0:
+        return empty
+    idx = keep[:, None] + np.arange(-before, after)[None, :]
+    sign = np.sign(v[np.minimum(keep + 3, v.size - 1)])
+    sign[sign == 0] = 1.0
+    segs = r[idx] * sign[:, None]
+    profile = segs.mean(axis=0)
+    explained = float(np.sum(segs**2) - np.sum((segs - profile) ** 2)) / total
+    k = int(np.argmax(np.abs(profile[before:]))) + before
+    peak = float(profile[k])
+    above = np.nonzero(np.abs(profile[before:]) >= 0.5 * abs(peak))[0]
+    half = float(above.size) * dt
+    return ReversalTransient(
+        int(keep.size),
+        before,
+        after,
+        float(keep.size * (before + after) / r.size),
+        profile,
+        max(explained, 0.0),
+        peak,
+        (k - before) * dt,
+        half,
+    )
+
+
+@dataclass(frozen=True)
 class ComplianceScreening(Screening):
     """The compliance screening: the residual spectrum's strongest peak and
-    its prominence against the band around it."""
+    its prominence against the band around it, and the transient the
+    residual repeats after each reversal of the driven speed."""
 
     resonance: Resonance | None = None
     prominence: float = 0.0
+    transient: ReversalTransient | None = None
 
 
 class Compliance(Effect):
     """A torsional spring-damper between the drive and the base gear, which
-    turns with base_inertia (eq. 11.2-11.4). The rigid model's residual then
-    rings at the shaft's natural frequency: a peak in its spectrum, which
-    seeds the stiffness through omega_n^2 = k / J_eff."""
+    turns with base_inertia (eq. 11.2-11.4; with base_inertia 0 the spring
+    acts at the mesh). Fitted as its natural frequency and damping ratio
+    (the stiffness alone trades off with the co-estimated inertia), and,
+    when the model has a driven-side friction, that friction's smoothing
+    speed: behind a spring the friction creeps (load_friction_regularised)."""
 
     name = "compliance"
     summary = (
-        "compliant base shaft: torsional stiffness and damping between the drive and the base "
-        "gear (rig compliance_stiffness, compliance_damping; base_inertia given or set)"
+        "compliance between the drive and the driven side: a torsional spring-damper at the "
+        "mesh or in the base shaft (rig compliance_stiffness, compliance_damping; base_inertia "
+        "given or 0), the driven side's friction creeping behind it"
     )
     signature_text = (
-        "residual power at a resonance: a peak in the residual spectrum, ringing after steps"
+        "the torque residual repeats one transient after every reversal of the driven speed, "
+        "or rings at a resonance"
     )
     n_params = 2
-    excitation = "steps of acceleration (the shaft rings after each)"
+    #: sub-stepped, and it moves the driven speed off the kinematics
+    costly = True
+    excitation = "steps of acceleration and reversals of the motion under friction"
     separated_from = {
         "inertia": "steps of acceleration: the shaft rings after a step, an inertia error does not",
         "viscous_friction": "steps of acceleration between two held speeds",
+        "sensor_delay": "reversals of the motion and steps of acceleration: a delay shifts the "
+        "whole torque, a compliance only delays what passes through friction at reversals",
+        "coulomb_friction": "reverse slowly and quickly: a compliance delays the friction's "
+        "reversal by a displacement, a Coulomb level flips within the speed band",
     }
-    internal_excitation = "steps of acceleration of several sizes"
+    internal_excitation = (
+        "steps of acceleration of several sizes (stiffness and damping) and slow reversals "
+        "under friction (the friction's smoothing speed)"
+    )
     #: a spectral peak less prominent than this (peak / median of the octave
     #: around it outside the peak's -3 dB band, band_prominence)
-    #: is no resonance: screening rules the effect out
+    #: is no resonance
     MIN_PROMINENCE = 8.0
-    #: the base inertia seeded, as a fraction of the driven inertia seen at the base
-    BASE_INERTIA_SEED = 0.2
+    #: a reversal transient explaining less than this share of the residual's
+    #: energy is no sign of compliance (with no resonance either, screening
+    #: rules the effect out)
+    MIN_REVERSAL_SHARE = 0.03
+    #: natural frequencies searched, as fractions of the sampling rate, when
+    #: no resonance peak seeds it: the band the record resolves where a well
+    #: damped mode need not ring visibly
+    FREQUENCY_GRID = (1.0 / 40.0, 1.0 / 20.0, 1.0 / 10.0, 1.0 / 5.0)
 
     def unavailable(self, model: Any) -> str | None:
         why = rig_has(model, "compliance_stiffness")
@@ -144,24 +246,62 @@ class Compliance(Effect):
         if mk.rig_values(model).get("base_drive", "speed") != "speed":
             return "a compliant shaft needs a speed-driven base"
         if mk.block_values(model).get("backlash_enabled", False):
-            return "a compliant shaft needs a rigid mesh (the model has backlash)"
+            return (
+                "a compliant shaft needs a rigid mesh: backlash already makes the mesh compliant "
+                "(its contact stiffness and damping)"
+            )
         return None
 
     def present(self, model: Any) -> bool:
         return float(mk.rig_values(model).get("compliance_stiffness", 0.0)) > 0.0
 
+    @staticmethod
+    def has_friction(model: Any) -> bool:
+        """The driven side has a friction whose smoothing the spring exposes."""
+        rig = mk.rig_values(model)
+        return (
+            float(rig.get("load_coulomb_friction", 0.0)) > 0.0
+            or float(rig.get("load_breakaway_friction", 0.0)) > 0.0
+        )
+
+    #: the columns of the rigid friction and loss family a reversal transient
+    #: must not be (a Coulomb step, a viscous slope, an offset, a meshing loss)
+    RIGID_FAMILY = ("sign", "speed", "constant", "mesh")
+
+    def rigid_cleaned(self, ctx: Any) -> np.ndarray:
+        """The driven-side residual without what the co-estimated parameters
+        and the rigid friction family explain (least squares): a Coulomb
+        step the model lacks is locked to the reversals too, but a rigid
+        friction makes it; what is left at the reversals is what no rigid
+        friction can make."""
+        from .registry import nuisance_columns
+
+        cols = [c[1] for c in nuisance_columns(ctx, self)]
+        cols += [ctx.columns[name] for name in self.RIGID_FAMILY if name in ctx.columns]
+        X = np.column_stack(cols)
+        coef, *_ = np.linalg.lstsq(X[ctx.idx], ctx.r_d[ctx.idx], rcond=None)
+        return ctx.r_d - X @ coef
+
     def screen(self, ctx: Any) -> ComplianceScreening:
         res = resonance(ctx.residual[ctx.torque_output], ctx.meas.dt)
         prom = band_prominence(res)
+        tr = reversal_transient(
+            self.rigid_cleaned(ctx), ctx.v, ctx.meas.dt, float(np.sum(ctx.r_d**2))
+        )
+        ringing = bool(np.isfinite(res.peak_hz) and prom >= self.MIN_PROMINENCE)
+        reversing = tr.explained_share >= self.MIN_REVERSAL_SHARE
+        share = max(res.band_share if ringing else 0.0, tr.explained_share if reversing else 0.0)
         tn = ctx.base_nrmse[ctx.torque_output]
-        left = tn * np.sqrt(max(1.0 - res.band_share, 0.0)) if prom else tn
+        left = tn * np.sqrt(max(1.0 - share, 0.0))
         why = None
-        if not (np.isfinite(res.peak_hz) and prom >= self.MIN_PROMINENCE):
+        if not (ringing or reversing):
             why = (
-                f"the residual spectrum has no resonance peak (strongest {prom:.1f}x "
-                f"its local floor, {self.MIN_PROMINENCE:g}x needed)"
+                f"the residual spectrum has no resonance peak (strongest {prom:.1f}x its local "
+                f"floor, {self.MIN_PROMINENCE:g}x needed) and no transient repeats after the "
+                f"reversals ({100 * tr.explained_share:.1f} % of the residual energy, "
+                f"{100 * self.MIN_REVERSAL_SHARE:g} % needed)"
             )
-        return ComplianceScreening(float(ctx.overall_nrmse(left)), None, why, res, prom)
+        return ComplianceScreening(float(ctx.overall_nrmse(left)), None, why, res, prom, tr)
 
     @staticmethod
     def reflected_inertia(model: Any) -> float:
@@ -169,49 +309,77 @@ class Compliance(Effect):
         j = float(mk.rig_values(model)[mk.driven_inertia_key(model)])
         return mk.kinematic_ratio(model) ** 2 * j
 
-    def base_inertia(self, ctx: Any) -> float:
-        """The base gear's inertia: given (rig base_inertia > 0), else
-        BASE_INERTIA_SEED of the driven inertia seen at the base. Only the sum
-        J_B + k^2 J_driven is seen on a speed-driven rig (eq. 11.3-11.4: the
-        shaft torque accelerates both alike), so it is not fitted: the
-        co-estimated driven inertia takes the rest."""
-        given = float(mk.rig_values(ctx.model).get("base_inertia", 0.0))
-        return given if given > 0 else self.BASE_INERTIA_SEED * self.reflected_inertia(ctx.model)
+    @staticmethod
+    def base_inertia(ctx: Any) -> float:
+        """The base gear's inertia behind the spring: given (rig base_inertia),
+        else 0, the spring acting at the mesh. Only the sum J_B + k^2 J_driven
+        is seen on a speed-driven rig (eq. 11.3-11.4: the spring accelerates
+        both alike), so it is not fitted: the co-estimated driven inertia
+        takes the rest."""
+        return float(mk.rig_values(ctx.model).get("base_inertia", 0.0))
+
+    def _ringing(self, screening: Screening | None) -> Resonance | None:
+        res = getattr(screening, "resonance", None)
+        prom = float(getattr(screening, "prominence", 0.0))
+        if res is None or not np.isfinite(res.peak_hz) or prom < self.MIN_PROMINENCE:
+            return None
+        return res
 
     def parameters(self, ctx: Any, screening: Screening | None) -> list[FitParam]:
         # fitted as the natural frequency and damping ratio of eq. 11.4: the
         # stiffness alone trades off with the co-estimated inertia (both
         # move the frequency), the frequency does not
-        res = getattr(screening, "resonance", None)
-        f0 = float(res.peak_hz) if res is not None else float("nan")
-        if not np.isfinite(f0) or f0 <= 0:
-            f0 = 0.05 / ctx.meas.dt
-        zeta = res.damping_ratio if res is not None else float("nan")
-        zeta = float(zeta) if np.isfinite(zeta) else 0.05
+        fs = 1.0 / ctx.meas.dt
+        res = self._ringing(screening)
         o = self.name
-        return [
+        if res is not None:
+            f0 = float(res.peak_hz)
+            zeta = float(res.damping_ratio) if np.isfinite(res.damping_ratio) else 0.05
+            # a lightly damped ring runs through many cycles: a 1 % frequency
+            # error turns its phase around, so look close first
+            f_grid, z_grid = (0.98, 0.99, 1.0, 1.01, 1.02), ()
+            zeta = min(max(zeta, 0.005), 0.5)
+        else:
+            f0 = self.FREQUENCY_GRID[1] * fs
+            f_grid = tuple(g * fs / f0 for g in self.FREQUENCY_GRID)
+            zeta, z_grid = 0.3, (0.5, 1.0, 2.0)
+        out = [
             FitParam(
                 "compliance_natural_frequency",
                 f0,
-                0.2 * f0,
-                min(5.0 * f0, 0.5 / ctx.meas.dt),
+                min(0.2 * f0, 0.01 * fs),
+                0.45 * fs,
                 "Hz",
                 owner=o,
-                # a lightly damped ring runs through many cycles: a 1 %
-                # frequency error turns its phase around, so look close first
-                grid=(0.98, 0.99, 1.0, 1.01, 1.02),
-                diff_step=1e-5,
+                grid=f_grid,
+                diff_step=1e-5 if res is not None else 1e-4,
+                log=res is None,
             ),
             FitParam(
-                "compliance_damping_ratio",
-                min(max(zeta, 0.005), 0.5),
-                0.0,
-                2.0,
-                "",
-                owner=o,
-                diff_step=1e-4,
+                "compliance_damping_ratio", zeta, 0.0, 4.0, "", owner=o, diff_step=1e-4, grid=z_grid
             ),
         ]
+        if self.has_friction(ctx.model):
+            out.append(self._creep_speed(ctx))
+        return out
+
+    def _creep_speed(self, ctx: Any) -> FitParam:
+        """The driven-side friction's smoothing speed, fitted as a logarithm:
+        behind the spring it sets how fast the friction reverses."""
+        now = float(mk.rig_values(ctx.model).get("load_coulomb_speed_threshold", 1e-3))
+        vmax = speed_scale(ctx)
+        return FitParam(
+            "load_coulomb_speed_threshold",
+            now,
+            min(1e-5 * vmax, now),
+            max(vmax, now),
+            speed_unit(ctx.model),
+            before=now,
+            owner=self.name,
+            grid=(1.0, 3.0, 10.0, 30.0),
+            diff_step=1e-3,
+            log=True,
+        )
 
     def _effective_inertia(self, ctx: Any, values: Mapping[str, float]) -> float:
         key = mk.driven_inertia_key(ctx.model)
@@ -219,37 +387,46 @@ class Compliance(Effect):
         return self.base_inertia(ctx) + mk.kinematic_ratio(ctx.model) ** 2 * j
 
     def build(self, ctx: Any, values: Mapping[str, float]) -> Changes:
+        rig: dict[str, Any] = {}
         if "compliance_natural_frequency" in values:
             wn = 2.0 * np.pi * float(values["compliance_natural_frequency"])
             zeta = float(values["compliance_damping_ratio"])
+            j = self._effective_inertia(ctx, values)
+            k = wn**2 * j
+            rig = {
+                "compliance_stiffness": k,
+                "compliance_damping": 2.0 * zeta * np.sqrt(k * j),
+                "base_inertia": self.base_inertia(ctx),
+                "load_friction_regularised": True,
+            }
         elif "compliance_stiffness" in values:  # present, re-estimated
-            k, c = float(values["compliance_stiffness"]), float(values["compliance_damping"])
-            return {}, {"compliance_stiffness": k, "compliance_damping": c}
-        else:
-            return {}, {}
-        j = self._effective_inertia(ctx, values)
-        k = wn**2 * j
-        return {}, {
-            "compliance_stiffness": k,
-            "compliance_damping": 2.0 * zeta * np.sqrt(k * j),
-            "base_inertia": self.base_inertia(ctx),
-        }
+            rig = {
+                "compliance_stiffness": float(values["compliance_stiffness"]),
+                "compliance_damping": float(values["compliance_damping"]),
+            }
+        if rig and "load_coulomb_speed_threshold" in values:
+            rig["load_coulomb_speed_threshold"] = float(values["load_coulomb_speed_threshold"])
+        return {}, rig
 
     def notes(self, model: Any) -> list[str]:
         return [
             "on a speed-driven rig only the sum base_inertia + (driven speed / base speed)^2 x "
-            "driven inertia is seen; base_inertia is kept (given, or "
-            f"{self.BASE_INERTIA_SEED:g} of the driven inertia seen at the base) and the driven "
-            "inertia takes the rest"
+            "driven inertia is seen; base_inertia is kept as given (0: the spring acts at the "
+            "mesh) and the driven inertia takes the rest",
+            "behind the spring the driven side's friction creeps (load_friction_regularised): "
+            "near rest it is a damper in series with the spring",
         ]
 
     def report(self, model: Any) -> dict[str, Any]:
         rig = mk.rig_values(model)
-        out = {k: rig[k] for k in ("compliance_stiffness", "compliance_damping", "base_inertia")}
+        keys = ("compliance_stiffness", "compliance_damping", "base_inertia")
+        out = {k: rig[k] for k in keys}
         j = float(rig["base_inertia"]) + self.reflected_inertia(model)
         k = float(rig["compliance_stiffness"])
         if k > 0 and j > 0:
             out["natural_frequency_hz"] = float(np.sqrt(k / j) / (2.0 * np.pi))
+        if self.has_friction(model):
+            out["load_coulomb_speed_threshold"] = rig["load_coulomb_speed_threshold"]
         return out
 
     def coestimated(self, ctx: Any, screening: Screening | None) -> list[FitParam]:
@@ -259,31 +436,95 @@ class Compliance(Effect):
             now = float(rig[key])
             lo, hi = (1e-2 * now, 1e2 * now) if now > 0 else (0.0, 1.0)
             out.append(
-                FitParam(key, now, lo, hi, unit, "coestimated", now, self.name, diff_step=1e-4)
+                FitParam(
+                    key,
+                    now,
+                    lo,
+                    hi,
+                    unit,
+                    "coestimated",
+                    now,
+                    self.name,
+                    diff_step=1e-4,
+                    log=now > 0,
+                )
             )
         return out
 
-    def evidence(self, ctx: Any, screening: Screening) -> dict[str, Any]:
-        res = screening.resonance
-        return {
+    def evidence(self, ctx: Any, screening: Screening, model: Any = None) -> dict[str, Any]:
+        res, tr = screening.resonance, screening.transient
+        ev: dict[str, Any] = {
             "signature": self.signature_text,
             "peak_hz": res.peak_hz,
             "prominence": screening.prominence,
             "damping_ratio": res.damping_ratio,
             "band_share": res.band_share,
-            "regime": None,
-            "text": (
-                f"the torque residual's spectrum peaks at {res.peak_hz:.1f} Hz, "
-                f"{screening.prominence:.1f}x its local floor, holding {100 * res.band_share:.0f} % "
-                "of the residual power: a resonance a rigid shaft cannot ring at"
-            ),
+            "reversals": tr.reversals,
+            "reversal_share": tr.explained_share,
+            "reversal_time_share": tr.time_share,
+            "reversal_peak": tr.peak,
+            "reversal_peak_time_s": tr.peak_time_s,
+            "reversal_half_time_s": tr.half_time_s,
+            "min_prominence": self.MIN_PROMINENCE,
+            "min_reversal_share": self.MIN_REVERSAL_SHARE,
+            "regime": "direction_reversal",
         }
+        fu = ctx.meas.spec.driven_force_unit
+        parts = []
+        if tr.explained_share >= self.MIN_REVERSAL_SHARE:
+            later = "later" if tr.peak < 0 else "earlier"
+            parts.append(
+                f"after the {tr.reversals} reversals of the driven speed the torque residual "
+                f"repeats one transient ({100 * tr.explained_share:.0f} % of the residual energy "
+                f"in {100 * tr.time_share:.1f} % of the time, peak {fmt(tr.peak)} {fu} "
+                f"{1e3 * tr.peak_time_s:.1f} ms after the reversal, above half of it for "
+                f"{1e3 * tr.half_time_s:.1f} ms): the measured force reverses {later} than the "
+                "rigid model's"
+            )
+        if self._ringing(screening) is not None:
+            parts.append(
+                f"the torque residual's spectrum peaks at {res.peak_hz:.1f} Hz, "
+                f"{screening.prominence:.1f}x its local floor, holding "
+                f"{100 * res.band_share:.0f} % of the residual power: a resonance a rigid "
+                "drive cannot ring at"
+            )
+        if not parts:
+            parts.append(
+                f"no resonance peak (the strongest, at {res.peak_hz:.1f} Hz, is "
+                f"{screening.prominence:.1f}x its local floor) and no repeated transient after "
+                f"the reversals ({100 * tr.explained_share:.1f} % of the residual energy)"
+            )
+        if model is not None and self.present(model):
+            fitted = self.report(model)
+            ev["fitted_natural_frequency_hz"] = fitted.get("natural_frequency_hz")
+            if ev["fitted_natural_frequency_hz"]:
+                parts.append(f"fitted natural frequency {ev['fitted_natural_frequency_hz']:.1f} Hz")
+        ev["text"] = "; ".join(parts)
+        return ev
 
     def plot(self, ctx: Any, ax: Any) -> None:
+        """The residual spectrum when it rings (a prominent peak), else the
+        transient the residual repeats after the reversals."""
         res = resonance(ctx.residual[ctx.torque_output], ctx.meas.dt)
-        ax.semilogy(res.freq_hz[1:], res.psd[1:], lw=1)
-        if np.isfinite(res.peak_hz):
+        if np.isfinite(res.peak_hz) and band_prominence(res) >= self.MIN_PROMINENCE:
+            ax.semilogy(res.freq_hz[1:], res.psd[1:], lw=1)
             ax.axvline(res.peak_hz, color="C3", ls="--", lw=1)
-        ax.set_xlabel("frequency (Hz)")
-        ax.set_ylabel("residual power density")
-        ax.set_title(f"compliance: residual spectrum, peak {res.peak_hz:.1f} Hz")
+            ax.set_xlabel("frequency (Hz)")
+            ax.set_ylabel("residual power density")
+            ax.set_title(f"compliance: residual spectrum, peak {res.peak_hz:.1f} Hz")
+            return
+        tr = reversal_transient(
+            self.rigid_cleaned(ctx), ctx.v, ctx.meas.dt, float(np.sum(ctx.r_d**2))
+        )
+        if tr.profile.size:
+            t = (np.arange(tr.profile.size) - tr.before) * ctx.meas.dt * 1e3
+            ax.plot(t, tr.profile, lw=1.2, label=f"mean over {tr.reversals} reversals")
+            ax.axvline(0.0, color="k", lw=0.5)
+            ax.axhline(0.0, color="k", lw=0.5)
+            ax.set_xlabel("time after a reversal of the driven speed (ms)")
+            ax.set_ylabel(f"residual x sign(new speed) ({ctx.meas.spec.driven_force_unit})")
+            ax.legend(fontsize=7)
+        ax.set_title(
+            f"compliance: the transient after reversals ({100 * tr.explained_share:.0f} % of "
+            "the residual energy)"
+        )

@@ -19,6 +19,7 @@ from .base import (
     force_scale,
     present_mesh_loss,
     seed_of,
+    speed_scale,
 )
 
 
@@ -34,6 +35,7 @@ class LoadDependentEfficiency(Effect):
     )
     n_params = 2
     replaces = ("meshing_efficiency",)
+    nests = ("meshing_efficiency",)
     excitation = "hold at several loads, including near zero load"
     separated_from = {
         "meshing_efficiency": "hold at several loads, including near zero load (only a "
@@ -70,10 +72,38 @@ class LoadDependentEfficiency(Effect):
         idle_f = max(seed_of(screening, "idle", 0.0), 0.0)  # follower-referred g*tau_idle
         k = max(present_mesh_loss(ctx.model) + seed_of(screening, "mesh", 0.02), 0.0)
         hi = max(2.0 * force_scale(ctx) / g, 10 * idle_f / g)
-        return [
+        out = [
             FitParam("idle_torque", idle_f / g, 0.0, hi, "N*m", owner=self.name),
             FitParam("load_slope", k, 0.0, 2.0, "", owner=self.name),
         ]
+        if "speed_threshold" not in ctx.model.block_params:
+            out.append(self._speed_threshold(ctx))
+        return out
+
+    #: the smoothing speed's grid, as multiples of its seed
+    THRESHOLD_GRID = (1.0, 3.0, 10.0, 30.0)
+
+    def _speed_threshold(self, ctx: Any) -> FitParam:
+        """The follower speed over which the loss reverses (eq. 2.4's tanh),
+        fitted as a logarithm when the model gives none: like a Coulomb
+        friction's, it is never sharper than the record's speed resolution
+        (signatures.SPEED_RESOLUTION), and a real gearbox's loss reverses
+        over a band the record shows (0.5 rad/s in an external test record,
+        50 times the 0.01 rad/s default)."""
+        default = float(mk.block_values(ctx.model).get("speed_threshold", 0.01))
+        vmax = speed_scale(ctx)
+        seed = max(default, float(ctx.speed_resolution))
+        return FitParam(
+            "speed_threshold",
+            seed,
+            min(1e-5 * vmax, seed),
+            max(vmax, seed),
+            "rad/s",
+            owner=self.name,
+            grid=self.THRESHOLD_GRID,
+            diff_step=1e-3,
+            log=True,
+        )
 
     def build(self, ctx: Any, values: Mapping[str, float]) -> Changes:
         if "idle_torque" not in values:
@@ -85,32 +115,50 @@ class LoadDependentEfficiency(Effect):
         # eq. 2.5: k = 1/eta_nom - 1 - g*tau_idle/tau_nom  =>  eta_nom; keep
         # eta_nom < 1 strictly against rounding
         eta = min(1.0 / (1.0 + k + g * idle / tnom + 1e-12), 1.0 - 1e-9)
-        return {
+        block = {
             "friction_model": "load_dependent_efficiency",
             "idle_torque": idle,
             "nominal_output_torque": tnom,
             "efficiency_nominal": eta,
-        }, {}
+        }
+        if "speed_threshold" in values:
+            block["speed_threshold"] = float(values["speed_threshold"])
+        return block, {}
 
     def report(self, model: Any) -> dict[str, Any]:
         v = mk.block_values(model)
-        keys = ("idle_torque", "nominal_output_torque", "efficiency_nominal")
+        keys = ("idle_torque", "nominal_output_torque", "efficiency_nominal", "speed_threshold")
         return {k: v[k] for k in keys}
 
-    def describe(self, ctx, screening, own, r, regime) -> str:
-        eff = self.evidence_extra(ctx, screening, own)["efficiency_at_load"]
-        return (
-            f"loss = {fmt(own.get('idle', 0.0))} {ctx.meas.spec.driven_force_unit} at no load + "
-            f"{fmt(own.get('mesh', 0.0))} x |transmitted torque| (r = {r:.2f}): efficiency "
-            f"{fmt(eff['10%'])} at 10 % of the peak load vs {fmt(eff['100%'])} at the peak; "
-            f"largest in {regime}"
-        )
-
-    def evidence_extra(self, ctx, screening, own) -> dict[str, Any]:
-        idle, k = own.get("idle", 0.0), own.get("mesh", 0.0)
+    def evidence_extra(self, ctx, screening, own, model=None) -> dict[str, Any]:
+        # driven-side loss = idle + k*|T|: from the fit when there is one,
+        # else from the screening (the present constant loss plus its change)
+        source = "screening"
+        idle = max(float(own.get("idle", 0.0)), 0.0)
+        k = max(present_mesh_loss(ctx.model) + float(own.get("mesh", 0.0)), 0.0)
+        if model is not None and self.present(model):
+            v = mk.block_values(model)
+            g = float(v["teeth_ratio"])
+            idle = g * float(v["idle_torque"])
+            k = (
+                1.0 / float(v["efficiency_nominal"])
+                - 1.0
+                - idle / float(v["nominal_output_torque"])
+            )
+            k, source = max(k, 0.0), "fit"
         tmax = float(np.percentile(np.abs(ctx.T), 95)) or 1.0
         eff = {}
         for frac in (0.1, 1.0):
             t = frac * tmax
             eff[f"{int(frac * 100)}%"] = t / (t + idle + k * t) if t > 0 else float("nan")
-        return {"efficiency_at_load": eff}
+        return {"idle_loss": idle, "load_slope": k, "efficiency_at_load": eff, "source": source}
+
+    def describe(self, ctx, ev, model=None) -> str | None:
+        eff = ev["efficiency_at_load"]
+        how = "fitted" if ev["source"] == "fit" else "seen in the residual"
+        return (
+            f"loss {how} = {fmt(ev['idle_loss'])} {ctx.meas.spec.driven_force_unit} at no load + "
+            f"{fmt(ev['load_slope'])} x |transmitted torque| (r = {ev['correlation']:.2f}): "
+            f"efficiency {fmt(eff['10%'])} at 10 % of the peak load vs {fmt(eff['100%'])} at the "
+            f"peak; largest in {ev['regime']}"
+        )

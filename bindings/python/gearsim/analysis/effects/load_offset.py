@@ -61,16 +61,23 @@ class LoadOffset(Effect):
     def nuisance_columns(self, ctx: Any) -> list[Column]:
         return self.columns(ctx)
 
-    def describe(self, ctx, screening, own, r, regime) -> str:
-        bias = -own.get("constant", 0.0)
-        shown = ("driving", "overrunning", "direction_reversal", "high_speed")
-        per = [
-            f"{reg.name} {fmt(float(np.mean(ctx.r_d[reg.mask])))}"
-            for reg in ctx.regimes
-            if reg.mask.any() and reg.name in shown
-        ]
+    #: the regimes whose mean residual the evidence shows
+    SHOWN = ("driving", "overrunning", "direction_reversal", "high_speed")
+
+    def evidence_extra(self, ctx, screening, own, model=None) -> dict[str, Any]:
+        return {
+            "bias": -float(own.get("constant", 0.0)),
+            "regime_means": {
+                reg.name: float(np.mean(ctx.r_d[reg.mask]))
+                for reg in ctx.regimes
+                if reg.mask.any() and reg.name in self.SHOWN
+            },
+        }
+
+    def describe(self, ctx, ev, model=None) -> str | None:
+        per = [f"{name} {fmt(v)}" for name, v in ev["regime_means"].items()]
         return (
-            f"constant bias of the driven-side residual: {fmt(bias)} "
-            f"{ctx.meas.spec.driven_force_unit} of missing load offset (r = {r:.2f}); mean "
-            f"residual by regime: {', '.join(per)}"
+            f"constant bias of the driven-side residual: {fmt(ev['bias'])} "
+            f"{ctx.meas.spec.driven_force_unit} of missing load offset (r = "
+            f"{ev['correlation']:.2f}); mean residual by regime: {', '.join(per)}"
         )

@@ -108,7 +108,9 @@ def _present_others(model: Any, effect: Effect | None) -> list[Effect]:
     ]
 
 
-def coestimated(ctx: Any, effect: Effect | None, screening: Screening | None = None) -> list[FitParam]:
+def coestimated(
+    ctx: Any, effect: Effect | None, screening: Screening | None = None
+) -> list[FitParam]:
     """Existing parameters re-estimated together with effect: the driven
     inertia and the present parameters of the effects the model has (effect
     None: every present one, a joint re-fit)."""

@@ -150,20 +150,21 @@ class SensorDelay(Effect):
     def report(self, model: Any) -> dict[str, Any]:
         return {"torque_delay": mk.torque_delay(model)}
 
-    #: delays under this many samples are not claimed: the sampling itself
-    #: blurs the channels' relative timing by up to a sample (a logger's
-    #: stamps), and a central-difference speed or a held output shifts a
-    #: channel by half a sample more
-    MIN_SAMPLES = 1.5
-
-    def negligible(self, ctx: Any, model: Any) -> str | None:
+    def inconsistent(self, ctx: Any, model: Any) -> str | None:
+        """A delay d makes the residual correlate with the simulated torque's
+        derivative most at a lag of d/2, with the sign opposite to d's: a
+        fitted delay the correlation does not show stands in for another
+        effect (in the bundled demo, a missing viscous friction)."""
         d = mk.torque_delay(model)
-        dt = ctx.meas.dt
-        if abs(d) >= self.MIN_SAMPLES * dt:
+        if d == 0.0:
+            return None
+        sig = self.signature(ctx)
+        if sig.peak_r * sig.peak_lag_s < 0 and sig.peak_lag_s * d > 0:
             return None
         return (
-            f"the fitted delay {1e3 * d:.3g} ms is under {self.MIN_SAMPLES:g} samples "
-            f"({1e3 * self.MIN_SAMPLES * dt:.3g} ms): within the timing resolution of the record"
+            f"the fitted delay {1e3 * d:.3g} ms is not what the residual shows (its correlation "
+            f"with the simulated torque's derivative peaks at {1e3 * sig.peak_lag_s:.3g} ms with "
+            f"r = {sig.peak_r:.2f}; a delay d peaks at d/2 with the opposite sign)"
         )
 
     def coestimated(self, ctx: Any, screening: Screening | None) -> list[FitParam]:
@@ -172,22 +173,38 @@ class SensorDelay(Effect):
     def nuisance_columns(self, ctx: Any) -> list[Column]:
         return self.columns(ctx)
 
-    def evidence_extra(self, ctx: Any, screening: Screening, own: dict[str, float]) -> dict[str, Any]:
+    def evidence_extra(self, ctx, screening, own, model=None) -> dict[str, Any]:
         sig = self.signature(ctx)
-        return {
+        # a pure delay d peaks at d/2 with a correlation of the opposite sign
+        # to d: the peak is a delay's only when the two signs disagree
+        delay_like = bool(sig.peak_r * sig.peak_lag_s < 0)
+        ev = {
             "peak_lag_s": sig.peak_lag_s,
             "peak_correlation": sig.peak_r,
-            "delay_from_correlation_s": sig.delay_s,
+            "delay_like": delay_like,
+            "delay_from_correlation_s": 2.0 * sig.peak_lag_s if delay_like else None,
         }
+        if model is not None:
+            ev["fitted_delay_s"] = mk.torque_delay(model)
+        return ev
 
-    def describe(self, ctx, screening, own, r, regime) -> str:
-        sig = self.signature(ctx)
-        return (
-            f"the residual correlates with the derivative of the simulated torque (r = "
-            f"{sig.peak_r:.2f} at a lag of {1e3 * sig.peak_lag_s:.2f} ms): the measured torque "
-            f"lags the model by about {1e3 * own.get('torque_delay', 0.0):.2f} ms; largest in "
-            f"{regime}"
+    def describe(self, ctx, ev, model=None) -> str | None:
+        r, lag = ev["peak_correlation"], ev["peak_lag_s"]
+        head = (
+            f"the residual correlates with the derivative of the simulated torque (r = {r:.2f} "
+            f"at a lag of {1e3 * lag:.2f} ms)"
         )
+        if not ev["delay_like"]:
+            return (
+                f"{head}: not a delay's correlation (a delay d peaks at d/2 with the opposite "
+                f"sign); largest in {ev['regime']}"
+            )
+        d = ev["delay_from_correlation_s"]
+        way = "lagged" if d > 0 else "led"
+        text = f"{head}: as if the measured torque {way} the model by {1e3 * abs(d):.2f} ms"
+        if "fitted_delay_s" in ev:
+            text += f" (fitted: {1e3 * ev['fitted_delay_s']:.2f} ms)"
+        return f"{text}; largest in {ev['regime']}"
 
     def plot(self, ctx: Any, ax: Any) -> None:
         sig = self.signature(ctx)

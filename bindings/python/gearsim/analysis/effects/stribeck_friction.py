@@ -221,22 +221,43 @@ class StribeckFriction(Effect):
         col = self._column(ctx, float(rig["load_stribeck_speed"]))
         return [("stribeck", col, (-ex, np.inf))]
 
-    def evidence_extra(self, ctx: Any, screening: Screening, own: dict[str, float]) -> dict[str, Any]:
+    def evidence_extra(self, ctx, screening, own, model=None) -> dict[str, Any]:
         prof = getattr(screening, "profile", None) or self.profile(ctx)
-        return {
+        ev: dict[str, Any] = {
             "profile_coulomb": prof.coulomb,
             "profile_excess": prof.excess,
-            "stribeck_speed": getattr(screening, "stribeck_speed", prof.stribeck_speed),
+            "profile_stribeck_speed": prof.stribeck_speed,
         }
+        if model is not None and self.present(model):
+            rig = mk.rig_values(model)
+            ev["fitted"] = {
+                "load_breakaway_friction": float(rig["load_breakaway_friction"]),
+                "load_coulomb_friction": float(rig["load_coulomb_friction"]),
+                "load_stribeck_speed": float(rig["load_stribeck_speed"]),
+            }
+        return ev
 
-    def describe(self, ctx, screening, own, r, regime) -> str:
-        vs = float(getattr(screening, "stribeck_speed", 0.0))
+    def describe(self, ctx, ev, model=None) -> str | None:
         fu, vu = ctx.meas.spec.driven_force_unit, ctx.meas.spec.driven_speed_unit
-        return (
-            f"the friction level seen in the residual falls with speed (r = {r:.2f}): "
-            f"{fmt(own.get('stribeck', 0.0))} {fu} above the level in motion near rest, "
-            f"decaying over ~{fmt(vs)} {vu}; largest in {regime}"
-        )
+        if ev["profile_excess"] > 0 and ev["profile_stribeck_speed"] > 0:
+            seen = (
+                f"the friction level in the residual rises towards rest (r = "
+                f"{ev['correlation']:.2f}): {fmt(ev['profile_excess'])} {fu} above its level in "
+                f"motion, falling over ~{fmt(ev['profile_stribeck_speed'])} {vu}"
+            )
+        else:
+            seen = (
+                f"the residual's friction level shows no rise towards rest (r = "
+                f"{ev['correlation']:.2f})"
+            )
+        fitted = ev.get("fitted")
+        if fitted:
+            seen += (
+                f"; fitted: breakaway {fmt(fitted['load_breakaway_friction'])} {fu} against a "
+                f"Coulomb level of {fmt(fitted['load_coulomb_friction'])} {fu}, falling over "
+                f"{fmt(fitted['load_stribeck_speed'])} {vu}"
+            )
+        return f"{seen}; largest in {ev['regime']}"
 
     def plot(self, ctx: Any, ax: Any) -> None:
         prof = self.profile(ctx)

@@ -9,7 +9,16 @@ from typing import Any
 import numpy as np
 
 from .. import modelkit as mk
-from .base import Changes, Column, Effect, FitParam, Screening, eff_from_loss, present_mesh_loss, seed_of
+from .base import (
+    Changes,
+    Column,
+    Effect,
+    FitParam,
+    Screening,
+    eff_from_loss,
+    present_mesh_loss,
+    seed_of,
+)
 
 
 def temperature_hats(temp: np.ndarray, breakpoints: np.ndarray) -> np.ndarray:
@@ -112,18 +121,31 @@ class TemperatureDependentEfficiency(Effect):
             "efficiency_vector": list(v["efficiency_vector"]),
         }
 
-    def describe(self, ctx, screening, own, r, regime) -> str:
-        loss = present_mesh_loss(ctx.model)
-        pts = [f"{1.0 - (loss + c):.3f} at {name.split('@')[1]}" for name, c in own.items()]
-        span = float(np.ptp(ctx.temperature))
-        return (
-            f"the torque-proportional loss changes with temperature (r = {r:.2f}): efficiency "
-            f"{', '.join(pts)} ({ctx.temperature_source} temperature spans {span:.1f} K); "
-            f"largest in {regime}"
-        )
-
-    def evidence_extra(self, ctx, screening, own) -> dict[str, Any]:
+    def evidence_extra(self, ctx, screening, own, model=None) -> dict[str, Any]:
+        bp = self.breakpoints(ctx)
+        if model is not None and self.present(model):
+            v = mk.block_values(model)
+            eta = np.interp(bp, v["temperature_vector"], v["efficiency_vector"])
+            source = "fit"
+        else:
+            loss = present_mesh_loss(ctx.model)
+            eta = [eff_from_loss(loss + own.get(f"mesh@{t:.1f}K", 0.0)) for t in bp]
+            source = "screening"
         return {
             "temperature_span_K": float(np.ptp(ctx.temperature)),
             "temperature_source": ctx.temperature_source,
+            "efficiency_at_temperature": [
+                [float(t), float(e)] for t, e in zip(bp, eta, strict=True)
+            ],
+            "source": source,
         }
+
+    def describe(self, ctx, ev, model=None) -> str | None:
+        pts = [f"{e:.3f} at {t:.1f} K" for t, e in ev["efficiency_at_temperature"]]
+        how = "fitted" if ev["source"] == "fit" else "seen in the residual"
+        return (
+            f"the torque-proportional loss changes with temperature (r = "
+            f"{ev['correlation']:.2f}): efficiency {how} {', '.join(pts)} "
+            f"({ev['temperature_source']} temperature spans {ev['temperature_span_K']:.1f} K); "
+            f"largest in {ev['regime']}"
+        )

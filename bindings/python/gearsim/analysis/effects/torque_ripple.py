@@ -264,7 +264,7 @@ class TorqueRipple(Effect):
     def nuisance_columns(self, ctx: Any) -> list[Column]:
         return self.columns(ctx)
 
-    def evidence_extra(self, ctx: Any, screening: Screening, own: dict[str, float]) -> dict[str, Any]:
+    def evidence_extra(self, ctx, screening, own, model=None) -> dict[str, Any]:
         harm = self._harmonics_of(ctx, screening)
         return {
             "teeth": self.teeth(ctx.model),
@@ -279,17 +279,17 @@ class TorqueRipple(Effect):
             ],
         }
 
-    def describe(self, ctx, screening, own, r, regime) -> str:
-        harm = self._harmonics_of(ctx, screening)
+    def describe(self, ctx, ev, model=None) -> str | None:
         parts = [
-            f"{fmt(h.amplitude)} N*m at {h.order:g}/rev"
-            for h in harm
-            if h.amplitude > self.SIGNIFICANCE * h.std_error
+            f"{fmt(h['amplitude'])} N*m at {h['order']:g}/rev"
+            for h in ev["harmonics"]
+            if h["amplitude"] > self.SIGNIFICANCE * h["std_error"]
         ]
         shown = ", ".join(parts) or "no harmonic above the noise"
         return (
-            f"the torque residual repeats with the base-shaft angle (r = {r:.2f}): {shown} "
-            f"(Z = {self.teeth(ctx.model)} teeth); largest in {regime}"
+            f"the torque residual repeats with the base-shaft angle (r = "
+            f"{ev['correlation']:.2f}): {shown} (Z = {ev['teeth']} teeth); largest in "
+            f"{ev['regime']}"
         )
 
     def plot(self, ctx: Any, ax: Any) -> None:

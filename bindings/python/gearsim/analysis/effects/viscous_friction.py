@@ -87,9 +87,14 @@ class ViscousFriction(Effect):
     def nuisance_columns(self, ctx: Any) -> list[Column]:
         return self.columns(ctx)
 
-    def describe(self, ctx, screening, own, r, regime) -> str:
+    def evidence_extra(self, ctx, screening, own, model=None) -> dict[str, Any]:
+        return {"slope": float(own.get("speed", 0.0))}
+
+    def describe(self, ctx, ev, model=None) -> str | None:
+        if not ev["slope"] > 0:
+            return None
         return (
-            f"residual grows in proportion to speed (r = {r:.2f}, slope "
-            f"{fmt(own.get('speed', 0.0))} {ctx.meas.spec.driven_force_unit} per "
-            f"{ctx.meas.spec.driven_speed_unit} of driven speed); largest in {regime}"
+            f"residual grows in proportion to speed (r = {ev['correlation']:.2f}, slope "
+            f"{fmt(ev['slope'])} {ctx.meas.spec.driven_force_unit} per "
+            f"{ctx.meas.spec.driven_speed_unit} of driven speed); largest in {ev['regime']}"
         )
