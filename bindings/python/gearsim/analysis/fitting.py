@@ -178,14 +178,16 @@ class FitResult:
             f"{self.validation_nrmse_after:.4g}, whole record {self.nrmse_before:.4g} -> "
             f"{self.nrmse_after:.4g}"
         )
+        verb = "lower" if self.effect == REFIT else "lowers"
         if self.accepted:
-            return f"accepted: {what} lowers both errors ({errors})"
+            return f"accepted: {what} {verb} both errors ({errors})"
         rose = []
         if not self.validation_nrmse_after < self.validation_nrmse_before:
             rose.append("the validation error")
         if not self.nrmse_after < self.nrmse_before:
             rose.append("the whole record's error")
-        return f"not accepted: {what} does not lower {' and '.join(rose)} ({errors})"
+        does = "do" if self.effect == REFIT else "does"
+        return f"not accepted: {what} {does} not lower {' and '.join(rose)} ({errors})"
 
     def to_json(self) -> dict:
         return {
