@@ -59,6 +59,8 @@ _RIG = {
     "ripple_mesh_amplitude": "rig.ripple_mesh_amplitude_Nm",
     "ripple_mesh_phase": "rig.ripple_mesh_phase_rad",
     "ripple_mesh_teeth": "rig.ripple_mesh_teeth",
+    "load_friction_regularised": "rig.load_friction_regularised",
+    "base_speed_ramp": "rig.base_speed_ramp",
 }
 
 GEAR_FIELDS: dict[str, str] = {
