@@ -46,9 +46,10 @@ static int backlash_in_envelope(const gs_backlash_params *b, int gear)
            in_mag(b->contact_release_force_N, 1e-9, 1e6);
 }
 
-static int table_in_envelope(const gs_real *x, int n, double lo, double hi)
+/* The first n of the cap entries of x (n from a count the fuzzer sets). */
+static int table_in_envelope(const gs_real *x, int n, int cap, double lo, double hi)
 {
-    for (int i = 0; i < n && i < GS_TABLE_MAX; ++i) {
+    for (int i = 0; i < n && i < cap; ++i) {
         if (!in_mag(x[i], lo, hi)) {
             return 0;
         }
@@ -62,9 +63,10 @@ static int gear_in_envelope(const gs_simple_gear_params *p)
            in_mag(p->idle_torque_Nm, 1e-9, 1e4) && in_mag(p->nominal_output_torque_Nm, 1e-6, 1e6) &&
            in_mag(p->efficiency_const, 1e-3, 1.0) && in_mag(p->efficiency_nominal, 1e-3, 1.0) &&
            in_mag(p->speed_threshold_rad_s, 1e-9, 1e6) &&
-           table_in_envelope(p->efficiency_vector, p->temperature_count, 1e-3, 1.0) &&
-           table_in_envelope(p->load_vector_Nm, p->load_count, 1e-9, 1e6) &&
-           table_in_envelope(&p->efficiency_matrix[0][0], GS_TABLE_MAX * GS_TABLE_MAX, 1e-3, 1.0) &&
+           table_in_envelope(p->efficiency_vector, p->temperature_count, GS_TABLE_MAX, 1e-3, 1.0) &&
+           table_in_envelope(p->load_vector_Nm, p->load_count, GS_TABLE_MAX, 1e-9, 1e6) &&
+           table_in_envelope(&p->efficiency_matrix[0][0], GS_TABLE_MAX * GS_TABLE_MAX,
+                             GS_TABLE_MAX * GS_TABLE_MAX, 1e-3, 1.0) &&
            in_mag(p->viscous_coefficients[0], 1e-9, 1e3) && in_mag(p->viscous_coefficients[1], 1e-9, 1e3) &&
            in_mag(p->thermal_mass_J_K, 1e-6, 1e9) && in_mag(p->initial_temperature_K, 1e-3, 1e4) &&
            backlash_in_envelope(&p->backlash, 1);
@@ -76,7 +78,7 @@ static int rack_in_envelope(const gs_rack_pinion_params *p)
                               ? in_mag(p->teeth_count, 1.0, 1e3) && in_mag(p->spacing_m, 1e-4, 1.0)
                               : in_mag(p->pinion_radius_m, 1e-4, 10.0);
     return radius_ok && in_mag(p->power_threshold_W, 1e-9, 1e6) && in_mag(p->efficiency_const, 1e-3, 1.0) &&
-           table_in_envelope(p->efficiency_vector, p->temperature_count, 1e-3, 1.0) &&
+           table_in_envelope(p->efficiency_vector, p->temperature_count, GS_TABLE_MAX, 1e-3, 1.0) &&
            in_mag(p->pinion_viscous_coefficient, 1e-9, 1e3) && in_mag(p->rack_viscous_coefficient, 1e-9, 1e4) &&
            in_mag(p->thermal_mass_J_K, 1e-6, 1e9) && in_mag(p->initial_temperature_K, 1e-3, 1e4) &&
            backlash_in_envelope(&p->backlash, 0);
