@@ -1,13 +1,14 @@
 """Build glue: the version from include/gearsim/version.h (its one source), the
-C library gearsim_core from src/ (build_clib, with the library's warning set)
-and the cffi extension from bindings/python/gearsim_build.py, linked against
-it. Everything else is in pyproject.toml."""
+C libraries gearsim_core from src/ and gearsim_hil from hil/src/ (build_clib,
+with the library's warning set) and the cffi extension from
+bindings/python/gearsim_build.py, linked against them; the packages, among
+them gearsim.hil.dbc from hil/dbc. Everything else is in pyproject.toml."""
 
 import re
 import sys
 from pathlib import Path
 
-from setuptools import setup
+from setuptools import find_packages, setup
 from setuptools.command.build_clib import build_clib
 from setuptools.command.build_ext import build_ext
 
@@ -54,9 +55,18 @@ class build_ext_with_core(build_ext):
         super().run()
 
 
+# The package lives in bindings/python; its DBC files live in hil/dbc with
+# the C library and are installed from there as the package gearsim.hil.dbc
+# (no copy, no link: a wheel and an sdist carry the files, an editable
+# install reads them in place).
+PACKAGE_DIR = {"": "bindings/python", "gearsim.hil.dbc": "hil/dbc"}
+PACKAGES = find_packages("bindings/python", include=["gearsim*"]) + ["gearsim.hil.dbc"]
+
 setup(
     version=_version(),
-    libraries=[gearsim_build.core_library()],
+    packages=PACKAGES,
+    package_dir=PACKAGE_DIR,
+    libraries=gearsim_build.c_libraries(),
     cmdclass={"build_clib": build_clib_flags, "build_ext": build_ext_with_core},
     cffi_modules=["bindings/python/gearsim_build.py:make_builder"],
 )

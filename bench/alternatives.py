@@ -331,14 +331,16 @@ def python_loop_full(
     its automatic choice). In each sub-step:
 
     1. explicit: the meshing loss of eq. 2.7 from the last contact force by
-       the corrected rule of physics.md 4.6 (D1): with T_F0 = -s*r_F*f
-       (eq. 4.6), th = tanh(4*omega_F/omega_th) and k = 1/eta - 1, the law
-       tau_mesh = k*|T_F|*th written in T_F gives, on the sign branch
+       the rule of physics.md 4.6, as the friction element of section 11
+       (at full strength while the follower slides, no smoothing): with
+       T_F0 = -s*r_F*f (eq. 4.6), th = sign(omega_F) and k = 1/eta - 1, the
+       law tau_mesh = k*|T_F|*th written in T_F gives, on the sign branch
        sigma = sign(T_F0), T_F = T_F0/(1 - sigma*k*th) and
        tau_mesh = T_F - T_F0 (self-locking, 1 - sigma*k*th <= 0: the loss
        k*|T_F0|*th instead); eta from the temperature x load table at this
        step's temperature and the base load |T_F|/g of the previous
-       evaluation (a fixed point that settles in steady contact);
+       evaluation (a fixed point that settles in steady contact). From rest
+       it is projected with the Coulomb friction (step 4);
     2. the follower's free motion over h (viscous term implicit), then the
        contact by backward Euler: the relative tooth speed u at the end of
        the sub-step solves Phi(u) = u - u_free + c*f(x + h*u, u) = 0 with
@@ -352,7 +354,9 @@ def python_loop_full(
        velocity projection on the follower speed after the contact: if
        |omega_F| <= h*tau_C/(J_F + h*mu_F) the follower stops (the friction
        holds it), else that amount is taken off its magnitude. It can stop
-       the follower within a sub-step but never reverse it;
+       the follower within a sub-step but never reverse it. A follower at
+       rest adds the meshing loss the way it would move to that amount, so
+       the loss holds it as well (section 11);
     5. the speeds, x (eq. 4.2 at the end speeds) and the sums of the outputs.
 
     After the sub-steps, the thermal mass: C*dT/dt = P_loss + (T_amb - T)/R_th
@@ -360,7 +364,6 @@ def python_loop_full(
     over the sub-steps), follower speed (rad/s), temperature (K) and backlash
     position (m) at each sample, and the sub-step count.
     """
-    tanh = math.tanh
     # -- constants (SI) --------------------------------------------------------
     g = p["teeth_ratio"]
     s = p["direction"]
@@ -379,7 +382,6 @@ def python_loop_full(
     temps = [float(v) for v in p["temperature_vector"]]  # K
     loads = [float(v) for v in p["load_vector"]]  # N*m at the base
     columns = [[float(row[j]) for row in p["efficiency_matrix"]] for j in range(len(loads))]
-    k_mesh = 4.0 / p["speed_threshold"]  # tanh(4*omega_F/omega_th)
     tau_c = p["load_coulomb_friction"]  # N*m
     a_th = dt / p["thermal_mass"]  # K/J
     g_th = 1.0 / p["thermal_resistance"]  # W/K
@@ -494,22 +496,23 @@ def python_loop_full(
         sum_tau_b = 0.0
         sum_loss = 0.0
         for k in range(n):
-            # explicit: meshing loss (eq. 2.7) by the corrected rule (D1)
+            # explicit: meshing loss (eq. 2.7) by the corrected rule (D1), at
+            # full strength in the direction the follower slides
             t_f0 = -sr_f * f_last
-            if t_f0 == 0.0:
-                tau_mesh = 0.0
-                t_f_last = 0.0
-            else:
-                eta = interp(loads, eta_of_load, abs(t_f_last) * inv_g)
-                k_loss = 1.0 / eta - 1.0
-                th = tanh(k_mesh * w_f)
+            eta = interp(loads, eta_of_load, abs(t_f_last) * inv_g)
+            k_loss = 1.0 / eta - 1.0
+
+            def mesh_loss(th: float) -> float:
+                if t_f0 == 0.0:
+                    return 0.0
                 denominator = 1.0 - (k_loss * th if t_f0 > 0.0 else -k_loss * th)
                 if denominator > 0.0:
-                    t_f_last = t_f0 / denominator
-                    tau_mesh = t_f_last - t_f0
-                else:  # self-locking: no solution on the branch
-                    tau_mesh = k_loss * abs(t_f0) * th
-                    t_f_last = t_f0 + tau_mesh
+                    return t_f0 / denominator - t_f0
+                return k_loss * abs(t_f0) * th  # self-locking: no solution on the branch
+
+            at_rest = w_f == 0.0
+            tau_mesh = mesh_loss(1.0 if w_f > 0.0 else -1.0) if not at_rest else 0.0
+            t_f_last = t_f0 + tau_mesh
             # the held base speed ramps linearly from the last sample to this one
             w_b_new = w_b_start + (w_in - w_b_start) * (k + 1) / n
             # free motion of the follower over h, then the contact
@@ -522,13 +525,19 @@ def python_loop_full(
                 w_f_free = (j_f * w_f + h * tau_load) / jh_f
                 u, f, f_spring = solve_contact(x, r_b * w_b_new - sr_f * w_f_free)
                 w_f_new = w_f_free + h * sr_f * f / jh_f
-            # the load's Coulomb friction (D2): stops the follower or slows it by h*tau_C/J
-            if w_f_new > coulomb_step:
-                w_f_new -= coulomb_step
-            elif w_f_new < -coulomb_step:
-                w_f_new += coulomb_step
+            # the load's Coulomb friction (D2): stops the follower or slows it by
+            # h*tau_C/J; from rest, the meshing loss the way it would move too
+            hold_step = coulomb_step
+            if at_rest and w_f_new != 0.0:
+                tau_mesh = mesh_loss(1.0 if w_f_new > 0.0 else -1.0)
+                hold_step += h * abs(tau_mesh) / jh_f
+            if w_f_new > hold_step:
+                w_f_new -= hold_step
+            elif w_f_new < -hold_step:
+                w_f_new += hold_step
             else:
                 w_f_new = 0.0
+                tau_mesh = 0.0  # held: no work
             w_b = w_b_new
             w_f = w_f_new
             x += h * (r_b * w_b - sr_f * w_f)  # eq. 4.2 at the end speeds

@@ -14,17 +14,26 @@ Lateness is the period start minus its deadline; period error is
 |start[k+1] - start[k] - period|; CPU share is the loop's CPU time over its
 wall time (the C runner's process; the Python loop's thread).
 
+Under load (--loads, default idle,other,same): the same loops with the loop
+pinned to --cpu (default 0) and a CPU hog (a busy Python process) pinned to
+the other core ("other") or to the same one ("same"); the C runner with
+--cpu, and for its SCHED_FIFO run also --mlockall; the Python bridge's
+process pinned with sched_setaffinity. p50, p99, p99.9 and max lateness and
+the overruns are reported side by side with the idle figures.
+
 Replay throughput: one session log (commands every 10 ms and the recorded
 feedback, --replay-seconds of simulated time, candump .log) replayed by
 gearsim-hil and by gearsim.hil.replay; input frames per wall second.
 
     python bench/hil_bench.py [--seconds 60] [--rates 1000,10000] [--spin-us US]
-                              [--fifo 50] [--replay-seconds 60] [--no-python] [--out FILE.json]
+                              [--fifo 50] [--loads idle,other,same] [--cpu 0]
+                              [--replay-seconds 60] [--no-python] [--out FILE.json]
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -58,13 +67,44 @@ def command_lines(dbc: RigDbc, t: float) -> bytes:
     ).encode()
 
 
+@contextlib.contextmanager
+def cpu_hog(cpu: int | None):
+    """A busy process pinned to cpu for the duration (None: no hog)."""
+    if cpu is None:
+        yield
+        return
+    hog = subprocess.Popen(
+        [sys.executable, "-c", f"import os; os.sched_setaffinity(0, {{{cpu}}})\nwhile True: pass"]
+    )
+    try:
+        time.sleep(0.2)  # running before the loop starts
+        yield
+    finally:
+        hog.kill()
+        hog.wait()
+
+
 def c_loop(
-    runner: Path, params: Path, rate: float, seconds: float, spin_us: int | None, fifo: int | None
+    runner: Path,
+    params: Path,
+    rate: float,
+    seconds: float,
+    spin_us: int | None,
+    fifo: int | None,
+    cpu: int | None = None,
 ) -> dict[str, Any]:
-    """The C runner paced for `seconds`, driven by this process over pipes."""
+    """The C runner paced for `seconds`, driven by this process over pipes;
+    with cpu pinned there (and with fifo, memory locked)."""
     dbc = RigDbc(block="gear")
     cmd = runner_mod.live_command(
-        params, period=1.0 / rate, duration=seconds, spin_us=spin_us, fifo=fifo, runner=runner
+        params,
+        period=1.0 / rate,
+        duration=seconds,
+        spin_us=spin_us,
+        fifo=fifo,
+        cpu=cpu,
+        mlockall=fifo is not None and cpu is not None,
+        runner=runner,
     )
     proc = subprocess.Popen(
         cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE
@@ -125,8 +165,19 @@ def c_loop(
     }
 
 
-def python_loop(rate: float, seconds: float, spin: float) -> dict[str, Any]:
-    """Bridge.run on the virtual bus with a host thread (examples/hil/loop_timing.py)."""
+def python_loop(rate: float, seconds: float, spin: float, cpu: int | None = None) -> dict[str, Any]:
+    """Bridge.run on the virtual bus with a host thread (examples/hil/loop_timing.py);
+    with cpu, the process pinned there for the run."""
+    allowed = os.sched_getaffinity(0)
+    if cpu is not None:
+        os.sched_setaffinity(0, {cpu})
+    try:
+        return _python_loop(rate, seconds, spin)
+    finally:
+        os.sched_setaffinity(0, allowed)
+
+
+def _python_loop(rate: float, seconds: float, spin: float) -> dict[str, Any]:
     model = gearsim.Model.load(MODEL)
     dbc = RigDbc(block=model.block)
     stop = threading.Event()
@@ -161,10 +212,14 @@ def python_loop(rate: float, seconds: float, spin: float) -> dict[str, Any]:
         peer.join()
         summary = bridge.close()
     loop = stats.summary()
+    import numpy as np
+
+    late = np.frombuffer(stats.lateness, dtype=np.float64) * 1e6
     return {
         "periods": int(loop["periods"]),
         "lateness_median_us": loop.get("lateness_median_us"),
         "lateness_p99_us": loop.get("lateness_p99_us"),
+        "lateness_p999_us": float(np.percentile(late, 99.9)) if len(late) else None,
         "lateness_max_us": loop.get("lateness_max_us"),
         "period_error_median_us": loop.get("period_error_median_us"),
         "period_error_p99_us": loop.get("period_error_p99_us"),
@@ -242,17 +297,17 @@ def fmt(x: Any, digits: int = 1) -> str:
 
 def table(results: dict[str, Any]) -> str:
     rows = [
-        "| loop | rate | lateness median / p99 / max (us) | period error p99 / max (us) "
+        "| load | loop | rate | lateness p50 / p99 / p99.9 / max (us) | period error p99 / max (us) "
         "| overruns | CPU share |",
-        "|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|",
     ]
     for r in results["loops"]:
         m = r["result"]
-        where = f"| {r['loop']} | {r['rate_hz']:g} Hz |"
+        where = f"| {r.get('load', 'idle')} | {r['loop']} | {r['rate_hz']:g} Hz |"
         if "refused" in m:
             rows.append(f"{where} refused: {m['refused']} | | | |")
             continue
-        late = " / ".join(fmt(m[f"lateness_{q}_us"]) for q in ("median", "p99", "max"))
+        late = " / ".join(fmt(m.get(f"lateness_{q}_us")) for q in ("median", "p99", "p999", "max"))
         error = " / ".join(fmt(m[f"period_error_{q}_us"]) for q in ("p99", "max"))
         share = 100 * m["cpu_share"]
         rows.append(
@@ -297,6 +352,13 @@ def main() -> int:
         help="simulated length of the replayed session",
     )
     ap.add_argument("--no-python", action="store_true", help="skip the Python bridge's loop")
+    ap.add_argument(
+        "--loads",
+        default="idle,other,same",
+        help="idle (no hog, no pinning), other (a CPU hog on the other core), same (on the "
+        "loop's core); comma-separated",
+    )
+    ap.add_argument("--cpu", type=int, default=0, help="the core the loaded runs pin the loop to")
     ap.add_argument("--out", help="also write the results as JSON (atomically)")
     args = ap.parse_args()
     runner = runner_mod.find_runner()
@@ -317,28 +379,45 @@ def main() -> int:
     with tempfile.TemporaryDirectory(prefix="gearsim-hil-bench-") as tmp:
         workdir = Path(tmp)
         params = runner_mod.write_params(gearsim.Model.load(MODEL), workdir / "gear.params")
-        for rate in rates:
-            spin = args.spin_us
-            runs: list[tuple[str, Any, tuple[Any, ...]]] = [
-                (
-                    "C runner, default scheduling",
-                    c_loop,
-                    (runner, params, rate, args.seconds, spin, None),
-                ),
-            ]
-            if args.fifo:
-                fifo = (runner, params, rate, args.seconds, spin, args.fifo)
-                runs.append((f"C runner, SCHED_FIFO {args.fifo}", c_loop, fifo))
-            if not args.no_python:
-                runs.append(("Python bridge", python_loop, (rate, args.seconds, args.python_spin)))
-            for name, measure, measure_args in runs:
-                print(
-                    f"hil_bench: {name} at {rate:g} Hz for {args.seconds:g} s ...",
-                    file=sys.stderr,
-                    flush=True,
-                )
-                result = measure(*measure_args)
-                results["loops"].append({"loop": name, "rate_hz": rate, "result": result})
+        cores = sorted(os.sched_getaffinity(0))
+        other = next((c for c in cores if c != args.cpu), None)
+        for load in [x.strip() for x in args.loads.split(",") if x.strip()]:
+            if load not in ("idle", "other", "same"):
+                print(f"hil_bench: --loads {load}: expected idle, other or same", file=sys.stderr)
+                return 2
+            if load == "other" and other is None:
+                print("hil_bench: one core only: no 'other' load", file=sys.stderr)
+                continue
+            pin = None if load == "idle" else args.cpu
+            hog = {"idle": None, "other": other, "same": args.cpu}[load]
+            for rate in rates:
+                spin = args.spin_us
+                runs: list[tuple[str, Any, tuple[Any, ...]]] = [
+                    (
+                        "C runner, default scheduling",
+                        c_loop,
+                        (runner, params, rate, args.seconds, spin, None, pin),
+                    ),
+                ]
+                if args.fifo:
+                    fifo = (runner, params, rate, args.seconds, spin, args.fifo, pin)
+                    label = f"C runner, SCHED_FIFO {args.fifo}" + (", mlockall" if pin is not None else "")
+                    runs.append((label, c_loop, fifo))
+                if not args.no_python:
+                    runs.append(
+                        ("Python bridge", python_loop, (rate, args.seconds, args.python_spin, pin))
+                    )
+                for name, measure, measure_args in runs:
+                    print(
+                        f"hil_bench: [{load}] {name} at {rate:g} Hz for {args.seconds:g} s ...",
+                        file=sys.stderr,
+                        flush=True,
+                    )
+                    with cpu_hog(hog):
+                        result = measure(*measure_args)
+                    results["loops"].append(
+                        {"load": load, "loop": name, "rate_hz": rate, "result": result}
+                    )
         print(
             f"hil_bench: replay of a {args.replay_seconds:g} s session ...",
             file=sys.stderr,

@@ -20,6 +20,14 @@ What it models (both blocks, every friction model, backlash always on):
   after the loss, so ``T_F = T_F0 + tau_mesh(T_F)`` is *solved numerically*
   (``scipy.optimize.brentq`` on a bracket that holds the root) at every
   evaluation of the right-hand side. No closed form of the C core is used.
+  As in the rigs (section 11, "Lossy meshes hold") the loss is a friction
+  element on the follower: while it slides, the law at full strength (every
+  tanh factor +-1, the sign of the speed or the power flow); at rest (a mode
+  entered by an event when the follower's speed reaches zero), no motion
+  while the torque that would move it, ``load + offset - T_F0``, stays
+  between the two bounds, the loss sliding forward and backward, and a
+  breakaway event when it leaves them. ``set_valued=False`` keeps the
+  smoothed laws everywhere.
 - Port torques ``tau_B = T_B + mu_B*omega_B`` and ``tau_F = T_F + mu_F*omega_F``
   (rack: ``F_R = F_net + mu_R*v_R``); the block applies ``-tau_X`` to its shaft.
 - Driven side: ``J_F*domega_F/dt = load + load_offset - coulomb(omega_F) - tau_F``
@@ -247,8 +255,14 @@ class MeshLoss:
             ]
         return self._cached_row
 
-    def tau_mesh(self, t_f: float, w_f: float, temperature: float) -> float:
-        """tau_mesh (or F_Coul) as the documented function of T_F, omega_F, T."""
+    def tau_mesh(
+        self, t_f: float, w_f: float, temperature: float, sigma: float | None = None
+    ) -> float:
+        """tau_mesh (or F_Coul) as the documented function of T_F, omega_F, T.
+
+        With ``sigma`` (+1 or -1) the law at full strength for a follower
+        sliding that way (section 11, the friction element): every tanh
+        factor is +-1, the sign of the power or of the speed it blends on."""
         m = self.model
         if m == "none":
             return 0.0
@@ -256,24 +270,33 @@ class MeshLoss:
             eta = self.efficiency(temperature)
             l_fd = 1.0 - eta  # follower drives, p > 0
             l_bd = 1.0 / eta - 1.0  # base drives, p < 0
-            t = math.tanh(self.power_gain * t_f * w_f)
+            if sigma is None:
+                t = math.tanh(self.power_gain * t_f * w_f)
+            else:
+                t = math.copysign(1.0, t_f * sigma) if t_f != 0.0 else 0.0
             if self.smoothing == "passive":  # (2.2)
                 return t_f * t * (l_fd if t >= 0.0 else l_bd)
             return 0.5 * t_f * ((l_fd + l_bd) * t + l_fd - l_bd)  # (2.1)
-        th = math.tanh(self.speed_gain * w_f)
+        th = math.tanh(self.speed_gain * w_f) if sigma is None else sigma
         if m == "load_dependent_efficiency":  # (2.6)
             return (self.c0 + self.k * abs(t_f)) * th
         # (2.7): eta from the table at the temperature and the base load |T_F|/g
         eta = interp1(self.loads, self.table_row(temperature), abs(t_f) / self.g)
         return abs(t_f) * (1.0 / eta - 1.0) * th
 
-    def solve(self, t_f0: float, w_f: float, temperature: float) -> float:
+    def solve(
+        self, t_f0: float, w_f: float, temperature: float, sigma: float | None = None
+    ) -> float:
         """T_F with T_F = T_F0 + tau_mesh(T_F, omega_F, T), by brentq on a
-        bracket that provably holds the root."""
+        bracket that provably holds the root; with ``sigma``, for the law at
+        full strength sliding that way (a self-locking direction, where no
+        root exists, raises SelfLocking)."""
         m = self.model
         if m == "none":
             return t_f0
-        tau = self.tau_mesh
+
+        def tau(t_f: float, w_f: float, temperature: float) -> float:
+            return self.tau_mesh(t_f, w_f, temperature, sigma)
 
         def phi(t_f: float) -> float:
             return t_f - t_f0 - tau(t_f, w_f, temperature)
@@ -290,9 +313,9 @@ class MeshLoss:
             a, b = eta * t_f0 * (1.0 - 1e-12), t_f0 / eta * (1.0 + 1e-12)
             lo, hi = (a, b) if a < b else (b, a)
         elif m == "load_dependent_efficiency":
-            th = math.tanh(self.speed_gain * w_f)
+            th = math.tanh(self.speed_gain * w_f) if sigma is None else sigma
             if self.k * abs(th) >= 1.0:
-                raise ValueError(
+                raise SelfLocking(
                     f"{m}: self-locking (k*|tanh| >= 1), T_F = T_F0 + tau_mesh(T_F) has no root"
                 )
             # phi is piecewise linear with slopes 1 -+ k*th > 0: one root, with
@@ -307,11 +330,11 @@ class MeshLoss:
             # extremes: T_F lies between T_F0/(1 - s*th*L_min) and T_F0/(1 - s*th*L_max).
             if t_f0 == 0.0:
                 return 0.0
-            th = math.tanh(self.speed_gain * w_f)
+            th = math.tanh(self.speed_gain * w_f) if sigma is None else sigma
             sth = th if t_f0 > 0.0 else -th
             q1, q2 = 1.0 - sth * self.l_min, 1.0 - sth * self.l_max
             if min(q1, q2) <= 0.0:
-                raise ValueError(f"{m}: self-locking (L*|tanh| >= 1), no root")
+                raise SelfLocking(f"{m}: self-locking (L*|tanh| >= 1), no root")
             a, b = t_f0 / q1, t_f0 / q2
             lo, hi = (a, b) if a < b else (b, a)
             lo, hi = lo - 1e-12 * abs(lo), hi + 1e-12 * abs(hi)
@@ -324,6 +347,10 @@ class MeshLoss:
             raise RuntimeError(f"{m}: no sign change on [{lo}, {hi}]")
         scale = max(abs(lo), abs(hi))
         return brentq(phi, lo, hi, xtol=1e-15 * scale + 1e-300, rtol=1e-14, maxiter=200)
+
+
+class SelfLocking(ValueError):
+    """The loss law has no solution T_F = T_F0 + tau_mesh(T_F) that way."""
 
 
 def _contact_law(
@@ -391,6 +418,7 @@ class Reference:
         rtol: float = 1e-9,
         method: str = "DOP853",
         max_step: float | None = None,
+        set_valued: bool = True,
     ) -> None:
         self.block = block
         if block == "simple_gear":
@@ -411,6 +439,7 @@ class Reference:
         self.temperature_input = bool(temperature_input)
         self.rtol = float(rtol)
         self.method = method
+        self.set_valued = bool(set_valued)
 
         # -- geometry: v = r_B*omega_B - c_F*omega_F, T_B = r_B*f, T_F0 = -c_F*f
         if block == "simple_gear":
@@ -573,6 +602,7 @@ class Reference:
         g_th = self.g_th
         tanh = math.tanh
         torque_driven = self.torque_driven
+        set_valued = self.set_valued
 
         # state: x, w_f, th_f, w_b, th_b, T, and the step integrals of tau_B,
         # tau_F, f, P_mesh, P_loss (reset to 0 at each step start)
@@ -580,7 +610,13 @@ class Reference:
         # per-step inputs, read by rhs
         cur = {"w0": 0.0, "dw": 0.0, "load": 0.0, "motor": 0.0, "temp": 0.0, "amb": 0.0}
 
-        def rhs(t: float, y: np.ndarray) -> list[float]:
+        # The meshing loss is a friction element on the follower (section 11):
+        # at full strength while it slides (mode +1 / -1, the sign of omega_F),
+        # holding it at rest (mode 0) while the torque that would move it stays
+        # within the two bounds, the loss it would take sliding either way.
+        mode = {"sigma": 0.0}
+
+        def drive_parts(t: float, y: np.ndarray) -> tuple[float, ...]:
             x, w_f, w_b, temp = y[0], y[1], y[3], y[5]
             if not torque_driven:
                 w_b = cur["w0"] + cur["dw"] * t
@@ -588,14 +624,42 @@ class Reference:
                 temp = cur["temp"]
             v = r_b * w_b - c_f * w_f
             f, f_spring = contact(x, v)
-            t_f0 = -c_f * f
-            t_f = solve_loss(t_f0, w_f, temp)
-            tau_f = t_f + mu_f * w_f
-            tau_b = r_b * f + mu_b * w_b
             ext = cur["load"] + offset
             if coulomb:
                 ext -= coulomb * tanh(coulomb_gain * w_f)
-            dw_f = (ext - tau_f) * inv_j_f
+            return w_f, w_b, temp, v, f, f_spring, ext
+
+        def bounds(t_f0: float, temp: float) -> tuple[float, float]:
+            """The loss sliding forward (+) and backward (-), as magnitudes;
+            inf where the mesh self-locks that way."""
+            out = []
+            for sigma in (1.0, -1.0):
+                try:
+                    out.append(sigma * (solve_loss(t_f0, 0.0, temp, sigma) - t_f0))
+                except SelfLocking:
+                    out.append(math.inf)
+            return out[0], out[1]
+
+        def hold(t: float, y: np.ndarray) -> tuple[float, float, float]:
+            """What holding the follower needs from the mesh, and the bounds."""
+            _, _, temp, _, f, _, ext = drive_parts(t, y)
+            t_f0 = -c_f * f
+            fwd, bwd = bounds(t_f0, temp)
+            return ext - t_f0, fwd, bwd
+
+        def rhs(t: float, y: np.ndarray) -> list[float]:
+            w_f, w_b, temp, v, f, f_spring, ext = drive_parts(t, y)
+            t_f0 = -c_f * f
+            if set_valued and mode["sigma"] == 0.0:
+                w_f = 0.0
+                t_f = ext  # held: the mesh takes ext - T_F0
+            elif set_valued:
+                t_f = solve_loss(t_f0, w_f, temp, mode["sigma"])
+            else:
+                t_f = solve_loss(t_f0, w_f, temp)
+            tau_f = t_f + mu_f * w_f
+            tau_b = r_b * f + mu_b * w_b
+            dw_f = (ext - tau_f) * inv_j_f if not (set_valued and mode["sigma"] == 0.0) else 0.0
             dw_b = (cur["motor"] - tau_b) * inv_j_b if torque_driven else 0.0
             p_mesh = (t_f - t_f0) * w_f
             p_loss = p_mesh + mu_b * w_b * w_b + mu_f * w_f * w_f + (f - f_spring) * v
@@ -608,23 +672,58 @@ class Reference:
         # events at the force law's breakpoints; each one's direction is set,
         # after it fires, to the opposite of the crossing it saw, so that a
         # restart at the event does not see the same crossing again
-        bounds = [self.half_gap, -self.half_gap]
+        breakpoints = [self.half_gap, -self.half_gap]
         if self.p["hard_stop_model"] == "smooth":
-            bounds += [self.half_gap + self.transition, -self.half_gap - self.transition]
-        events = []
-        for b in bounds:
+            breakpoints += [self.half_gap + self.transition, -self.half_gap - self.transition]
+        contact_events = []
+        for b in breakpoints:
 
             def ev(t: float, y: np.ndarray, b: float = b) -> float:
                 return y[0] - b
 
             ev.terminal = True
             ev.direction = 0.0
-            events.append(ev)
+            contact_events.append(ev)
+
+        # the friction element's events: a sliding follower reaching rest; a
+        # held one whose holding torque leaves its bounds
+        def stops(t: float, y: np.ndarray) -> float:
+            return y[1]
+
+        stops.terminal = True
+
+        def breaks_forward(t: float, y: np.ndarray) -> float:
+            need, fwd, _ = hold(t, y)
+            return need - fwd if math.isfinite(fwd) else -1.0
+
+        breaks_forward.terminal = True
+        breaks_forward.direction = 1.0
+
+        def breaks_backward(t: float, y: np.ndarray) -> float:
+            need, _, bwd = hold(t, y)
+            return need + bwd if math.isfinite(bwd) else 1.0
+
+        breaks_backward.terminal = True
+        breaks_backward.direction = -1.0
+
+        def settle_mode(t: float, y: np.ndarray) -> None:
+            """At rest: hold, or break away the way the torque pushes."""
+            need, fwd, bwd = hold(t, y)
+            mode["sigma"] = 1.0 if need > fwd else (-1.0 if need < -bwd else 0.0)
+
+        def events_now() -> list:
+            if not set_valued:
+                return contact_events
+            if mode["sigma"] == 0.0:
+                return contact_events + [breaks_forward, breaks_backward]
+            stops.direction = -mode["sigma"]
+            return contact_events + [stops]
 
         # initial state
         w_b0 = drive_l[0] if not torque_driven else float(self.r["initial_base_speed"])
         temp0 = self.initial_temperature
         y = np.array([self.x0, w_b0 / self.ratio, 0.0, w_b0, 0.0, temp0] + [0.0] * 5)
+        mode["sigma"] = math.copysign(1.0, y[1]) if y[1] != 0.0 else 0.0
         atol = np.array(
             [1e-14, 1e-11, 1e-11, 1e-11, 1e-11, 1e-9, 1e-14, 1e-14, 1e-12, 1e-14, 1e-14]
         )
@@ -664,6 +763,9 @@ class Reference:
             t = 0.0
             changes = 0
             while True:
+                if set_valued and mode["sigma"] == 0.0:
+                    settle_mode(t, y)  # the new inputs may break it away
+                events = events_now()
                 sol = solve_ivp(
                     rhs,
                     (t, dt),
@@ -685,7 +787,14 @@ class Reference:
                 if sol.status == 0:
                     break
                 for i, te in enumerate(sol.t_events):
-                    if len(te):
+                    if not len(te):
+                        continue
+                    if events[i] is stops:  # the follower reached rest
+                        y[1] = 0.0
+                        settle_mode(t, y)
+                    elif events[i] is breaks_forward or events[i] is breaks_backward:
+                        mode["sigma"] = 1.0 if events[i] is breaks_forward else -1.0
+                    else:
                         v = rhs(t, y)[0]
                         events[i].direction = -1.0 if v > 0.0 else 1.0
                         changes += i < 2  # the teeth met or parted at |x| = b/2

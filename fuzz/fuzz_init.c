@@ -46,11 +46,24 @@ static int backlash_in_envelope(const gs_backlash_params *b, int gear)
            in_mag(b->contact_release_force_N, 1e-9, 1e6);
 }
 
-/* The first n of the cap entries of x (n from a count the fuzzer sets). */
+/* The first n of x (n a fuzzed count: at most cap). */
 static int table_in_envelope(const gs_real *x, int n, int cap, double lo, double hi)
 {
     for (int i = 0; i < n && i < cap; ++i) {
         if (!in_mag(x[i], lo, hi)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* The efficiency matrix rows and columns in use (the 2-D table reads its
+ * efficiency at any of them; checking only its first row missed a subnormal
+ * entry whose reciprocal overflowed, fuzz finding). */
+static int matrix_in_envelope(const gs_simple_gear_params *p)
+{
+    for (int i = 0; i < p->temperature_count && i < GS_TABLE_MAX; ++i) {
+        if (!table_in_envelope(p->efficiency_matrix[i], p->load_count, GS_TABLE_MAX, 1e-3, 1.0)) {
             return 0;
         }
     }
@@ -65,8 +78,7 @@ static int gear_in_envelope(const gs_simple_gear_params *p)
            in_mag(p->speed_threshold_rad_s, 1e-9, 1e6) &&
            table_in_envelope(p->efficiency_vector, p->temperature_count, GS_TABLE_MAX, 1e-3, 1.0) &&
            table_in_envelope(p->load_vector_Nm, p->load_count, GS_TABLE_MAX, 1e-9, 1e6) &&
-           table_in_envelope(&p->efficiency_matrix[0][0], GS_TABLE_MAX * GS_TABLE_MAX,
-                             GS_TABLE_MAX * GS_TABLE_MAX, 1e-3, 1.0) &&
+           matrix_in_envelope(p) &&
            in_mag(p->viscous_coefficients[0], 1e-9, 1e3) && in_mag(p->viscous_coefficients[1], 1e-9, 1e3) &&
            in_mag(p->thermal_mass_J_K, 1e-6, 1e9) && in_mag(p->initial_temperature_K, 1e-3, 1e4) &&
            backlash_in_envelope(&p->backlash, 1);

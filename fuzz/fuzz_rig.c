@@ -21,11 +21,17 @@
  *     loss_power >= 0 (passive smoothing; Simscape smoothing is documented
  *     as slightly active, so only the balance is checked there); with a
  *     compliant shaft only loss_power >= 0 (see the check);
+ *   - torque-driven base, every mesh: the drive's work over a step is exact,
+ *     W = (T_m - tau_r(theta_B))*(theta_B' - theta_B) + (L + L_0)*(x_F' - x_F)
+ *     (motor torque and load held over the step, the ripple at the step's
+ *     start angle, physics.md 11), and dKE + dE_contact <= W + rounding with
+ *     KE = J_B*w_B^2/2 + J_F*w_F^2/2: no energy created by anything inside
+ *     the rig (mesh loss, friction, contact, sub-steps);
  *   - backlash, every friction model and smoothing: port_power*dt >=
  *     loss_power*dt + (contact_energy now - contact_energy before) -
- *     rounding tolerance (no energy created), and with the no-pull clip
- *     loss_power*dt >= -tolerance (the balance alone cannot see a negative
- *     loss that the spring absorbs);
+ *     rounding tolerance (no energy created), and loss_power*dt >=
+ *     -tolerance (the balance alone cannot see a negative loss that the
+ *     spring absorbs), with and without the no-pull clip;
  *   - determinism: a copy of the state (snapshot), stepped with a copy of
  *     the constants and the same input, gives the same bits, and gs_rig_run
  *     gives the bits of gs_rig_step. */
@@ -68,7 +74,24 @@ typedef struct {
     double half_gap;
     int no_pull;
     double inv_eff_mass_contact;   /* 1/m_eff at the pitch line for one sub-step (backlash) */
+    double base_inertia;           /* J_B, J_F: the kinetic energy of a torque-driven rig */
+    double driven_inertia;
+    double ripple_cos[2], ripple_sin[2], mesh_cos[2], mesh_sin[2]; /* A*cos(phi), A*sin(phi) of eq. 11.5 */
+    double ripple_sum;             /* sum of the ripple amplitudes, N*m */
+    double ripple_stiffness;       /* K_r = sum i*A_i + j*Z*M_j, N*m/rad */
+    int teeth;
 } rig_info;
+
+/* The ripple torque of eq. 11.5 at base angle theta, from its definition. */
+static double ripple_at(const rig_info *info, double theta)
+{
+    double t = 0.0;
+    for (int i = 0; i < 2; ++i) {
+        t += info->ripple_cos[i] * cos((i + 1) * theta) - info->ripple_sin[i] * sin((i + 1) * theta);
+        t += info->mesh_cos[i] * cos((i + 1) * info->teeth * theta) - info->mesh_sin[i] * sin((i + 1) * info->teeth * theta);
+    }
+    return t;
+}
 
 /* 1/m_eff at the pitch line for the sub-step h = dt/substeps, viscous terms
  * implicit, as the rig's init derives it (docs/physics.md section 11):
@@ -267,6 +290,21 @@ static gs_status build(fz_reader *r, gs_rig_consts *consts, gs_rig_state *state,
     info->base_extra = base_extra;
     info->compliant = rp.compliance_stiffness_Nm_rad > (gs_real)0.0;
     info->ramp = rp.base_speed_ramp != 0;
+    info->base_inertia = (double)rp.base_inertia_kg_m2;
+    info->driven_inertia = (double)rp.driven_inertia;
+    info->teeth = rp.ripple_mesh_teeth;
+    info->ripple_sum = 0.0;
+    info->ripple_stiffness = 0.0;
+    for (int i = 0; i < 2; ++i) {
+        const double a = (double)rp.ripple_revolution_amplitude_Nm[i], pa = (double)rp.ripple_revolution_phase_rad[i];
+        const double m = (double)rp.ripple_mesh_amplitude_Nm[i], pm = (double)rp.ripple_mesh_phase_rad[i];
+        info->ripple_cos[i] = a * cos(pa);
+        info->ripple_sin[i] = a * sin(pa);
+        info->mesh_cos[i] = m * cos(pm);
+        info->mesh_sin[i] = m * sin(pm);
+        info->ripple_sum += a + m;
+        info->ripple_stiffness += (i + 1) * a + (i + 1) * info->teeth * m;
+    }
     info->stiffness = (double)bl.stiffness_N_m;
     info->damping = (double)bl.damping_N_s_m;
     info->half_gap = 0.5 * (double)bl.linear_backlash_m;
@@ -342,7 +380,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     gs_rig_input inputs[MAX_STEPS];
     gs_rig_output outputs[MAX_STEPS];
     double energy_before = 0.0;
-    double w_b_last = 0.0, w_f_last = 0.0; /* the last step's reported speeds */
+    /* the last step's kinematics, for the external work of a torque-driven rig */
+    double w_b_before = (double)state.base_speed, w_f_before = (double)state.follower_speed;
+    double theta_before = (double)state.base_angle, x_before = (double)state.follower_position;
     int k = 0;
     for (; k < MAX_STEPS && r.n >= 10; ++k) {
         gs_rig_input *in = &inputs[k];
@@ -378,11 +418,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         const double loss = (double)o->loss_power;
         /* with the step-mean speed the torques are those of the mean of the
          * last and this speed: the larger of the two bounds it */
-        const double w_b = info.ramp ? fmax(fabs((double)o->base_speed), w_b_last) : fabs((double)o->base_speed);
-        const double w_f = info.ramp ? fmax(fabs((double)o->follower_speed), w_f_last)
+        const double w_b = info.ramp ? fmax(fabs((double)o->base_speed), fabs(w_b_before))
+                                     : fabs((double)o->base_speed);
+        const double w_f = info.ramp ? fmax(fabs((double)o->follower_speed), fabs(w_f_before))
                                      : fabs((double)o->follower_speed);
-        w_b_last = fabs((double)o->base_speed);
-        w_f_last = fabs((double)o->follower_speed);
         /* magnitude of the terms whose rounding the balance carries */
         const double scale = fabs((double)o->base_port_torque) * w_b
                              + fabs((double)o->follower_port_torque) * w_f + fabs(loss) + fabs(port)
@@ -403,6 +442,45 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         const double impulse_scale = info.backlash ? (f_abs + f_ext) * (f_abs + f_ext) * h_sub
                                                          * info.inv_eff_mass_contact
                                                    : 0.0;
+        if (info.torque_driven) {
+            /* The drive's work is exact: dKE + dE_contact <= W. */
+            const double w_b1 = (double)o->base_speed, w_f1 = (double)o->follower_speed;
+            const double theta1 = (double)o->base_angle, x1 = (double)o->follower_position;
+            const double d_theta = theta1 - theta_before, d_x = x1 - x_before;
+            const double push = (double)in->load + info.load_offset;
+            const double motor = (double)in->base_torque;
+            const double ripple = info.ripple_sum > 0.0 ? ripple_at(&info, theta_before) : 0.0;
+            const double work = (motor - ripple) * d_theta + push * d_x;
+            const double ke0 = 0.5 * (info.base_inertia * w_b_before * w_b_before + info.driven_inertia * w_f_before * w_f_before);
+            const double ke1 = 0.5 * (info.base_inertia * w_b1 * w_b1 + info.driven_inertia * w_f1 * w_f1);
+            const double e0 = info.backlash ? energy_before : 0.0, e1 = (double)o->contact_energy;
+            const double created = (ke1 - ke0) + (e1 - e0) - work;
+            /* rounding: of the energies and works; of the stored angles (each
+             * sub-step's addition rounds to ulp(theta)); of the ripple (float
+             * cos, and the tooth phase Z*theta carries eps*|theta|*Z); of the
+             * contact's absolute position like the backlash check below */
+            const double n_sub = (double)info.substeps;
+            const double quant = (n_sub + 1.0) * eps * (fabs(motor - ripple) * (fabs(theta_before) + fabs(theta1))
+                                                       + fabs(push) * (fabs(x_before) + fabs(x1)))
+                                 + 4.0 * info.ripple_stiffness * eps * (fabs(theta_before) + 1.0) * fabs(d_theta);
+            const double f_spring = info.backlash ? sqrt(2.0 * info.stiffness * fmax(e0, e1)) : 0.0;
+            const double position = info.backlash ? 4.0 * f_spring * eps * (fabs((double)o->backlash_position) + info.half_gap) * n_sub : 0.0;
+            const double mag = ke0 + ke1 + e0 + e1 + fabs(motor * d_theta) + fabs(ripple * d_theta) + fabs(push * d_x)
+                               + dt * (fabs(loss) + fabs(port) + fabs((double)o->base_port_torque) * fabs(w_b1)
+                                       + fabs((double)o->follower_port_torque) * fabs(w_f1));
+            /* and the sub-step impulses of the contact, whose free speeds
+             * (a light side, a large motor torque on locked teeth) are far
+             * larger than the step's: their rounding times the force */
+            const double tol = 1024.0 * eps * (mag + impulse_scale * dt) + quant + position + 1e-300;
+            FZ_CHECK(created <= tol,
+                     "torque-driven: energy created %.9g J > tol %.3g J (dKE %.9g, dE %.9g, work %.9g: motor %.9g, "
+                     "ripple %.9g, load %.9g) at step %d",
+                     created, tol, ke1 - ke0, e1 - e0, work, motor * d_theta, -ripple * d_theta, push * d_x, k);
+        }
+        w_b_before = (double)o->base_speed;
+        w_f_before = (double)o->follower_speed;
+        theta_before = (double)o->base_angle;
+        x_before = (double)o->follower_position;
         if (info.compliant) {
             /* The balance holds in every shaft sub-step, but the step's means
              * hide the sub-step magnitudes its rounding scales with (a stiff
@@ -443,9 +521,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                      " at step %d",
                      created, tol, port, loss, dt, energy_before, energy, k);
             /* The balance above cannot see a negative loss that the spring
-             * absorbs (port = loss + dE/dt still holds): check the loss itself.
-             * Not without the no-pull clip: known limit L3 (docs/hardening.md). */
-            if (info.no_pull) {
+             * absorbs (port = loss + dE/dt still holds): check the loss itself,
+             * with the no-pull clip and without (the pulling contact ends on its
+             * root or on a passive bracket end, docs/model.md). */
+            {
                 /* plus the contact solve's own accuracy: its root is found to
                  * NEWTON_TOLERANCE of the pitch-line speed scale, which the
                  * impulse-balance force carries as (1 + kappa)/c times that,

@@ -6,12 +6,15 @@
 # machine: the figures are the machine's scheduling as much as the code's.
 #
 # Usage: scripts/hil_bench.sh [--seconds 60] [--rates 1000,10000] [--spin-us US]
-#                             [--fifo 50] [--replay-seconds 60] [--no-python] [--out FILE.json]
+#                             [--fifo 50] [--loads idle,other,same] [--cpu 0]
+#                             [--replay-seconds 60] [--no-python] [--out FILE.json]
+#   loads: idle; a CPU hog on the other core; one on the loop's core (--cpu), with
+#   the loop pinned there (C runner --cpu, and --mlockall with --fifo)
 #   (options go to bench/hil_bench.py; --seconds 5 is a smoke run)
 # Environment: GEARSIM_PYTHON  the Python with gearsim installed (default: .venv).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-case "${1:-}" in -h|--help) sed -n '2,11p' "$0"; exit 0 ;; esac
+case "${1:-}" in -h|--help) sed -n '2,14p' "$0"; exit 0 ;; esac
 
 py=${GEARSIM_PYTHON:-.venv/bin/python}
 if [ ! -x "$py" ]; then

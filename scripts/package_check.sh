@@ -7,7 +7,11 @@
 #      with cmocka hidden: a parent project needs none of the test tools and
 #      gets only the static library;
 #   4. at top level with cmocka hidden, configuring fails and says how to fix
-#      it (install libcmocka-dev, or BUILD_TESTING=OFF).
+#      it (install libcmocka-dev, or BUILD_TESTING=OFF);
+#   5. the Python package: an sdist, a wheel built from it (pip, as a user
+#      builds one), checked by tests/package/wheel_check.py: the sdist holds
+#      the C sources and hil/dbc, the wheel the DBC files as plain package
+#      data identical to hil/dbc, and the unpacked wheel runs its bridge.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${PACKAGE_BUILD_DIR:-build/package}
@@ -47,4 +51,13 @@ elif ! grep -q "libcmocka-dev" "$out/no-cmocka.log" || ! grep -q "BUILD_TESTING=
   cat "$out/no-cmocka.log"; echo "package_check: no clear message without cmocka"; exit 1
 fi
 echo "package_check: top-level configure without cmocka stops, saying to install libcmocka-dev or set BUILD_TESTING=OFF"
-echo "package_check: find_package(gearsim), pkg-config and add_subdirectory() consumers ok"
+python=${PYTHON:-.venv/bin/python}
+[ -x "$python" ] || python=python3
+mkdir -p "$out/dist"
+# python -m build: the sdist as a user builds one, in an isolated environment
+# with the build requirements of pyproject.toml (not whatever .venv holds)
+"$python" -m build --sdist -o "$out/dist" . >"$out/sdist.log" 2>&1 || { cat "$out/sdist.log"; echo "package_check: sdist failed"; exit 1; }
+"$python" -m pip wheel -q --no-deps -w "$out/dist" "$out"/dist/gearsim-*.tar.gz >"$out/wheel.log" 2>&1 \
+  || { cat "$out/wheel.log"; echo "package_check: building a wheel from the sdist failed"; exit 1; }
+"$python" tests/package/wheel_check.py "$out/dist"
+echo "package_check: find_package(gearsim), pkg-config and add_subdirectory() consumers, sdist and wheel ok"

@@ -3,6 +3,9 @@
 #include "gs_math.h"
 #include "validate.h"
 
+/* The published size of gs_simple_gear_consts and gs_rack_pinion_consts. */
+GS_CONSTS_REALS_CHECK_(GS_BLOCK_CONSTS_REALS, gs_mesh_);
+
 gs_status gs_mesh_set_backlash(gs_mesh_ *m, const gs_backlash_params *p, gs_real base_radius,
                                gs_real follower_radius, gs_error *err)
 {

@@ -73,20 +73,44 @@ typedef struct {
     gs_real c;                   /* h/m_eff, s/kg */
     gs_real inv_c;               /* m_eff/h, kg/s */
     gs_real c_stiffness;         /* c*K, 1/s */
-    gs_real inv_affine_damped;   /* 1/(1 + c*(K*h + D)) */
+    gs_real c_damping;           /* c*D: lambda = c*D*p0 of the damped affine piece */
+    gs_real kappa;               /* c*(K*h + D): the damped law's slope in h*Phi over delta */
+    gs_real kappa_spring;        /* c*K*h: the spring's share of it */
+    gs_real h_over_d;            /* h/d (smooth law): the scaled penetration per closing speed, s */
+    gs_real d_over_h;            /* d/h, m/s */
+    gs_real inv_kappa;           /* 1/kappa */
+    gs_real inv_affine_damped;   /* 1/(1 + kappa) */
     gs_real inv_affine_undamped; /* 1/(1 + c*K*h) */
-    gs_real draw_dv;             /* K*h + D: d(K*delta + D*v)/dv, N*s/m */
-    gs_real dxi_dv;              /* h/d: d(delta/d)/dv for the smooth law, s/m */
     gs_real transition;          /* d, m (smooth law) */
-    int law_force_conditioned;   /* kappa = c*(K*h + D) < 1: the law may give the root's force */
+    int law_force_conditioned;   /* kappa < 1: the law may give the root's force */
 } gs_contact_step_;
 
-/* The public opaque blocks are views of these internal types: a compile-time
- * check that the published sizes hold them (C99: a negative array size). The
- * published sizes are those of the x86-64 and AAPCS hosts; where enums are
- * packed into one byte (arm-none-eabi) the internal type is a few bytes
- * smaller. */
+/* A compile-time check (C99: a negative array size). */
 #define GS_STATIC_ASSERT_(name, cond) typedef char gs_static_assert_##name[(cond) ? 1 : -1]
+
+/* The public opaque constants (gs_rig_consts, gs_*_consts) are views of
+ * internal types, published as a count of reals (GS_RIG_CONSTS_REALS,
+ * GS_BLOCK_CONSTS_REALS) because the layout is private. The check below keeps
+ * the published count exact, so that it cannot go stale unnoticed when the
+ * internal layout changes. Where enums are int-sized and reals aligned to
+ * their size (the hosts: x86-64, AArch64, ...) a count that differs from what
+ * the internal type needs fails to compile with "conflicting types for
+ * 'gs_set_<MACRO>_to'"; the type the compiler reports for the second
+ * declaration, char[N] ("have" in GCC's message, the first type in clang's),
+ * gives the value N to write in the header. Where enums are packed into one
+ * byte (arm-none-eabi) the internal type is a few bytes smaller: there the
+ * published count must hold it. */
+#define GS_REALS_FOR_(bytes) (((bytes) + sizeof(gs_real) - 1u) / sizeof(gs_real))
+typedef struct {
+    char c;
+    gs_real x;
+} gs_real_alignment_probe_;
+#define GS_EXACT_CONSTS_ABI_ \
+    (sizeof(gs_friction_model) == sizeof(int) && sizeof(gs_real_alignment_probe_) == 2u * sizeof(gs_real))
+#define GS_CONSTS_REALS_CHECK_(macro, internal)                                                      \
+    GS_STATIC_ASSERT_(macro##_holds_internal, (size_t)(macro) * sizeof(gs_real) >= sizeof(internal)); \
+    extern char gs_set_##macro##_to[macro];                                                           \
+    extern char gs_set_##macro##_to[GS_EXACT_CONSTS_ABI_ ? GS_REALS_FOR_(sizeof(internal)) : (size_t)(macro)]
 
 /* Mesh-loss quantities that depend only on the temperature, evaluated once
  * per step. */
@@ -117,9 +141,40 @@ gs_real gs_mesh_loss_torque(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real 
  * T_F (the base load of the 2-D table, a fixed point in steady contact). */
 gs_real gs_mesh_loss_from_tooth(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real t_f0, gs_real w,
                                 gs_real load_estimate);
-/* tau_mesh ~ m0 + m1*T near (T, w): used by the implicit torque-driven step. */
-void gs_mesh_loss_linearize(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T, gs_real w,
-                            gs_real *m0, gs_real *m1);
+
+/* The meshing loss as a friction element, where a rig's driven side or base
+ * gear moves freely (physics.md 11, "Lossy meshes hold"). Sliding with the
+ * follower speed's sign sigma, the loss is the law of section 2 at full
+ * strength,
+ *   tau_mesh = sigma*(c0 + k_fd*max(sigma*T_F, 0) + k_bd*max(-sigma*T_F, 0)),
+ * k_fd where the follower drives (sigma*T_F > 0), k_bd where the base drives;
+ * at rest it holds anything within those bounds (set-valued). */
+typedef struct {
+    gs_real c0;   /* follower-referred constant part (g*tau_idle), N*m or N */
+    gs_real k_fd; /* slope on |T_F| with the follower driving */
+    gs_real k_bd; /* slope on |T_F| with the base driving */
+    gs_real q_fd; /* k_fd/(1 - k_fd): the bound on the loss-free tooth torque, follower
+                     driving; < 0 where 1 - k_fd <= 0 (self-locking: no bound) */
+    gs_real q_bd; /* k_bd/(1 + k_bd): the same, base driving */
+    int lossy;    /* 0: no meshing loss */
+} gs_mesh_friction_;
+
+/* The law's coefficients for the step. The 2-D table reads its efficiency
+ * at the base load |load_estimate|/g (a recent T_F). */
+void gs_mesh_friction_law(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real load_estimate,
+                          gs_mesh_friction_ *law);
+/* The loss torque of the law sliding with follower speed w (w != 0) under
+ * the net follower torque t_f; 0 for w = 0. */
+static inline gs_real gs_mesh_friction_torque(const gs_mesh_friction_ *law, gs_real t_f, gs_real w)
+{
+    if (w > GS_R(0.0)) {
+        return law->c0 + (t_f > GS_R(0.0) ? law->k_fd * t_f : -law->k_bd * t_f);
+    }
+    if (w < GS_R(0.0)) {
+        return -law->c0 + (t_f < GS_R(0.0) ? law->k_fd * t_f : -law->k_bd * t_f);
+    }
+    return GS_R(0.0);
+}
 
 /* Hard-stop contact (hard_stop.c). x: backlash position (m), u: relative
  * tooth velocity (m/s). */
@@ -129,11 +184,7 @@ gs_real gs_contact_energy(const gs_mesh_ *m, gs_real x);
 /* The constants of gs_contact_solve for sub-step h (s) and the inverse
  * effective mass inv_mass (1/kg) at the pitch line. */
 void gs_contact_prepare(const gs_mesh_ *m, gs_real h, gs_real inv_mass, gs_contact_step_ *cs);
-/* Backward-Euler contact over one sub-step cs->h: finds u with
- * u = u_free - cs->c*f(x + h*u, u); returns u, the force and its spring part.
- * Handles the static-contact lock when enabled. Bounded cost. */
-gs_real gs_contact_solve(const gs_mesh_ *m, gs_block_state *st, const gs_contact_step_ *cs, gs_real x,
-                         gs_real u_free, gs_real *force, gs_real *f_spring);
+/* The backward-Euler contact over one sub-step: src/contact.h. */
 
 /* Thermal mass: explicit heat flow q_W, or an ambient path through
  * conductance g_W_K treated implicitly (stable for any thermal mass). */

@@ -13,23 +13,30 @@
 void gs_mesh_loss_prepare(const gs_mesh_ *m, gs_real temperature, gs_loss_ctx_ *ctx)
 {
     gs_real eta = m->eta;
+    if (m->friction == GS_FRICTION_NONE) {
+        ctx->loss_forward = ctx->loss_backward = GS_R(0.0); /* no law reads them */
+        return;
+    }
     switch (m->friction) {
     case GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY:
         eta = gs_interp1(m->table.eta_of_T.x, m->table.eta_of_T.y, m->table.eta_of_T.n, temperature);
         break;
     case GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY: {
         /* Bilinear = linear in temperature per load column, then in load. The
-         * temperature bracket and weight are found once for all columns. */
+         * temperature bracket and weight are found once for all columns; the
+         * law reads only the collapsed column (no loss factors). */
         const gs_table2_ *t = &m->table.eta_of_T_load;
         int lo = 0;
         int hi = 0;
         gs_real w = GS_R(0.0);
         gs_interp_bracket(t->x, t->nx, temperature, &lo, &hi, &w);
+        const gs_real *z_lo = t->z[lo];
+        const gs_real *z_hi = t->z[hi];
         for (int j = 0; j < t->ny; ++j) {
-            ctx->eta_of_load[j] =
-                lo == hi ? t->z[lo][j] : t->z[lo][j] + w * (t->z[hi][j] - t->z[lo][j]);
+            ctx->eta_of_load[j] = z_lo[j] + w * (z_hi[j] - z_lo[j]);
         }
-        break;
+        ctx->loss_forward = ctx->loss_backward = GS_R(0.0);
+        return;
     }
     case GS_FRICTION_NONE:
     case GS_FRICTION_CONSTANT_EFFICIENCY:
@@ -129,24 +136,43 @@ gs_real gs_mesh_loss_from_tooth(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_r
     return GS_R(0.0);
 }
 
-void gs_mesh_loss_linearize(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T, gs_real w,
-                            gs_real *m0, gs_real *m1)
+void gs_mesh_friction_law(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real load_estimate,
+                          gs_mesh_friction_ *law)
 {
-    *m0 = GS_R(0.0);
-    *m1 = GS_R(0.0);
+    law->c0 = GS_R(0.0);
+    law->lossy = 1;
     switch (m->friction) {
     case GS_FRICTION_NONE:
-        break;
+        law->k_fd = law->k_bd = law->q_fd = law->q_bd = GS_R(0.0);
+        law->lossy = 0;
+        return;
     case GS_FRICTION_CONSTANT_EFFICIENCY:
     case GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY:
-        *m1 = efficiency_loss_factor(m, ctx, T, w);
-        break;
-    case GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY:
+        /* L_fd = 1 - eta, L_bd = 1/eta - 1; on the tooth torque the roles
+         * swap: k_fd/(1 - k_fd) = L_bd, k_bd/(1 + k_bd) = L_fd */
+        law->k_fd = ctx->loss_forward;
+        law->k_bd = ctx->loss_backward;
+        law->q_fd = ctx->loss_backward;
+        law->q_bd = ctx->loss_forward;
+        return;
+    case GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY: {
+        const gs_real k = m->load_slope;
+        law->c0 = m->coulomb_idle;
+        law->k_fd = law->k_bd = k;
+        law->q_fd = k < GS_R(1.0) ? k / (GS_R(1.0) - k) : GS_R(-1.0);
+        law->q_bd = k / (GS_R(1.0) + k);
+        return;
+    }
     case GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY: {
-        const gs_real th = gs_tanh(GS_R(4.0) * w * m->inv_speed_threshold);
-        *m0 = m->coulomb_idle * th;
-        *m1 = coulomb_slope(m, ctx, T) * gs_sign(T) * th;
-        break;
+        /* k = 1/eta - 1: k/(1 - k) = (1 - eta)/(2*eta - 1), k/(1 + k) = 1 - eta */
+        const gs_real load = gs_abs(load_estimate) * m->base_load_scale;
+        const gs_real eta = gs_interp1(m->table.eta_of_T_load.y, ctx->eta_of_load, m->table.eta_of_T_load.ny, load);
+        const gs_real two_eta_1 = GS_R(2.0) * eta - GS_R(1.0);
+        law->k_fd = law->k_bd = GS_R(1.0) / eta - GS_R(1.0);
+        law->q_fd = two_eta_1 > GS_R(0.0) ? (GS_R(1.0) - eta) / two_eta_1 : GS_R(-1.0);
+        law->q_bd = GS_R(1.0) - eta;
+        return;
     }
     }
 }
+

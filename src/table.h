@@ -1,17 +1,44 @@
 /* table.h - clamped linear interpolation (internal). Breakpoints are
- * validated strictly increasing at init, so the step only searches. */
+ * validated strictly increasing at init, so the step only searches. Inline:
+ * the step path calls these once or twice per (sub-)step. */
 #ifndef GS_TABLE_H
 #define GS_TABLE_H
 
 #include "gearsim/types.h"
 
-/* y(x) by linear interpolation over n breakpoints; the end values hold
- * outside [x[0], x[n-1]] (physics.md 2.4). Cost: O(n), n <= GS_TABLE_MAX. */
-gs_real gs_interp1(const gs_real *x, const gs_real *y, int n, gs_real at);
-
 /* The bracket of `at`: y(at) = y[lo] + w*(y[hi] - y[lo]), or y[lo] with
- * lo == hi where `at` is clamped to an end. Same arithmetic as gs_interp1, so
- * interpolating several columns with one bracket gives the same bits. */
-void gs_interp_bracket(const gs_real *x, int n, gs_real at, int *lo, int *hi, gs_real *w);
+ * lo == hi (w = 0) where `at` is clamped to an end. Cost: O(n), n <=
+ * GS_TABLE_MAX. */
+static inline void gs_interp_bracket(const gs_real *x, int n, gs_real at, int *lo, int *hi, gs_real *w)
+{
+    *w = GS_R(0.0);
+    if (!(at > x[0])) {
+        *lo = *hi = 0;
+        return;
+    }
+    if (!(at < x[n - 1])) {
+        *lo = *hi = n - 1;
+        return;
+    }
+    int i = 1;
+    while (i < n - 1 && !(at < x[i])) {
+        ++i;
+    }
+    *lo = i - 1;
+    *hi = i;
+    *w = (at - x[i - 1]) / (x[i] - x[i - 1]);
+}
+
+/* y(x) by linear interpolation over n breakpoints; the end values hold
+ * outside [x[0], x[n-1]] (physics.md 2.4). Same arithmetic as the bracket,
+ * so interpolating several columns with one bracket gives the same bits. */
+static inline gs_real gs_interp1(const gs_real *x, const gs_real *y, int n, gs_real at)
+{
+    int lo = 0;
+    int hi = 0;
+    gs_real w = GS_R(0.0);
+    gs_interp_bracket(x, n, at, &lo, &hi, &w);
+    return y[lo] + w * (y[hi] - y[lo]);
+}
 
 #endif /* GS_TABLE_H */

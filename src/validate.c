@@ -52,8 +52,11 @@ gs_status gs_check_efficiency(gs_error *err, gs_real value, const char *paramete
     if (!gs_is_finite(value)) {
         return gs_fail(err, GS_E_NOT_FINITE, parameter);
     }
-    return (value > GS_R(0.0) && value <= GS_R(1.0)) ? GS_OK
-                                                     : gs_fail(err, GS_E_EFFICIENCY_RANGE, parameter);
+    if (!(value > GS_R(0.0) && value <= GS_R(1.0))) {
+        return gs_fail(err, GS_E_EFFICIENCY_RANGE, parameter);
+    }
+    /* the laws use 1/eta: a subnormal efficiency would overflow it */
+    return gs_is_finite(GS_R(1.0) / value) ? GS_OK : gs_fail(err, GS_E_MAGNITUDE, parameter);
 }
 
 gs_status gs_check_breakpoints(gs_error *err, const gs_real *x, int n, int nonnegative,

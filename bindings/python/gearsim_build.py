@@ -2,8 +2,9 @@
 
 The C declarations seen by Python are not written here: ``generate_cdef()``
 runs the C preprocessor over the public umbrella header
-``include/gearsim/gearsim.h`` at build time and hands its output to cffi, so
-the cdef is the headers (tests/python/test_bindings_build.py checks it).
+``include/gearsim/gearsim.h`` and the HIL library's ``hil/include/gearsim/hil.h``
+at build time and hands its output to cffi, so the cdef is the headers
+(tests/python/test_bindings_build.py checks it).
 
 - ``cc -E -P -std=c99 -nostdinc -DGS_API=`` expands the field lists of
   gearsim/fields.h, the table sizes and the precision macros; ``-nostdinc``
@@ -22,7 +23,9 @@ the cdef is the headers (tests/python/test_bindings_build.py checks it).
 
 The library sources ``src/*.c`` are compiled apart from cffi's generated
 wrapper, as the static library ``gearsim_core`` (``core_library()``, built by
-setuptools' ``build_clib`` from ``setup.py``), with the library's warning set
+setuptools' ``build_clib`` from ``setup.py``), and the HIL library's
+``hil/src/*.c`` (the bridge that ``gearsim.hil`` runs: the same C as the
+runner gearsim-hil) as ``gearsim_hil`` (``hil_library()``), with the library's warning set
 ``cmake/gearsim_warnings.txt`` (the list CMake reads) and the determinism
 flags of CMake's ``gearsim_configure``: ``-ffp-contract=off -fno-fast-math``.
 ``GEARSIM_WERROR=1`` in the environment adds ``-Werror``. The wrapper (cffi's
@@ -49,12 +52,18 @@ from pathlib import Path
 from cffi import FFI
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent.parent  # repository root: include/, src/ and cmake/ live there
+ROOT = HERE.parent.parent  # repository root: include/, src/, hil/ and cmake/ live there
 INCLUDE_DIR = ROOT / "include"
 SRC_DIR = ROOT / "src"
 UMBRELLA = INCLUDE_DIR / "gearsim" / "gearsim.h"
+HIL_INCLUDE_DIR = ROOT / "hil" / "include"
+HIL_SRC_DIR = ROOT / "hil" / "src"
+HIL_HEADER = HIL_INCLUDE_DIR / "gearsim" / "hil.h"
 WARNINGS_FILE = ROOT / "cmake" / "gearsim_warnings.txt"
 CORE_LIBRARY = "gearsim_core"
+HIL_LIBRARY = "gearsim_hil"
+# What the cdef is generated from: the core's umbrella header, then the HIL's.
+CDEF_SOURCE = '#include "gearsim/gearsim.h"\n#include "gearsim/hil.h"\n'
 
 # The bindings' own declarations, appended to the generated cdef: the stepper
 # of Rig.step (SHIM below) and the compiler's layout table (_layout_table).
@@ -78,6 +87,9 @@ typedef struct {
 const gspy_layout *gspy_layouts(size_t *count);
 
 static const char *const GSPY_CDEF;  /* this cdef, as the extension was built with it */
+
+/* gs_hil_config.send of the bridges gearsim.hil makes (gearsim/hil/bridge.py) */
+extern "Python" int gspy_hil_send(void *context, const gs_hil_frame *frame);
 """
 
 # C compiled into the wrapper beside the cffi code (not part of the C API): a
@@ -177,6 +189,36 @@ def core_library(absolute: bool = False) -> tuple[str, dict]:
     )
 
 
+def hil_library(absolute: bool = False) -> tuple[str, dict]:
+    """build_clib entry of the static library gearsim_hil (hil/src/*.c): the
+    HIL bridge, with the core's flags. Its frame tables come from the DBC
+    files at run time (gearsim.hil.codec), not from hil/dbc_tables.py."""
+    sources = sorted(HIL_SRC_DIR.glob("*.c"))
+    if not sources:
+        raise RuntimeError(f"gearsim: no C sources found in {HIL_SRC_DIR}")
+    deps = [HIL_HEADER, *sorted(HIL_SRC_DIR.glob("*.h")), *sorted((INCLUDE_DIR / "gearsim").glob("*.h"))]
+    deps.append(WARNINGS_FILE)
+    deps += [Path(__file__).resolve(), ROOT / "setup.py"]
+    return (
+        HIL_LIBRARY,
+        {
+            "sources": [_path(p, absolute) for p in sources],
+            "include_dirs": [
+                _path(HIL_INCLUDE_DIR, absolute),
+                _path(INCLUDE_DIR, absolute),
+                _path(HIL_SRC_DIR, absolute),
+            ],
+            "cflags": core_cflags(),
+            "obj_deps": {"": [_path(p, absolute) for p in deps if p.exists()]},
+        },
+    )
+
+
+def c_libraries(absolute: bool = False) -> list[tuple[str, dict]]:
+    """Every static library of the extension, for setup.py's ``libraries``."""
+    return [core_library(absolute), hil_library(absolute)]
+
+
 def preprocessor() -> list[str]:
     """The C compiler used as preprocessor: $CC, else Python's, else cc."""
     cc = os.environ.get("CC") or sysconfig.get_config_var("CC") or "cc"
@@ -193,6 +235,8 @@ def _preprocess(options: list[str], source: Path, stub_dir: Path, defines: list[
         str(stub_dir),
         "-I",
         str(INCLUDE_DIR),
+        "-I",
+        str(HIL_INCLUDE_DIR),
         "-DGS_API=",
         *defines,
         *options,
@@ -243,19 +287,27 @@ def _clean(declarations: str) -> str:
 
 
 def generate_cdef(single_precision: bool = False) -> str:
-    """The cdef of the public headers (include/gearsim/gearsim.h), without the
-    bindings' own declarations (BINDINGS_CDEF)."""
+    """The cdef of the public headers (include/gearsim/gearsim.h and
+    hil/include/gearsim/hil.h), without the bindings' own declarations
+    (BINDINGS_CDEF)."""
     defines = ["-DGS_SINGLE_PRECISION"] if single_precision else []
     with tempfile.TemporaryDirectory(prefix="gearsim-cdef-") as tmp:
         stub_dir = Path(tmp)
-        # cffi knows size_t; nothing else of <stddef.h> is used by the headers.
+        # cffi knows size_t and the fixed-width integers; nothing else of
+        # <stddef.h> and <stdint.h> is used by the headers.
         (stub_dir / "stddef.h").write_text("/* stub: cffi declares size_t */\n")
+        (stub_dir / "stdint.h").write_text("/* stub: cffi declares uint8_t, ... */\n")
+        source = stub_dir / "cdef.c"
+        source.write_text(CDEF_SOURCE)
         empty = stub_dir / "empty.c"
         empty.write_text("")
-        declarations = _preprocess(["-P"], UMBRELLA, stub_dir, defines)
-        macros = _preprocess(["-dM"], UMBRELLA, stub_dir, defines)
+        declarations = _preprocess(["-P"], source, stub_dir, defines)
+        macros = _preprocess(["-dM"], source, stub_dir, defines)
         predefined = _preprocess(["-dM"], empty, stub_dir, defines)
-    header = "/* generated by gearsim_build.py from include/gearsim/gearsim.h */\n"
+    header = (
+        "/* generated by gearsim_build.py from include/gearsim/gearsim.h and "
+        "hil/include/gearsim/hil.h */\n"
+    )
     return header + "\n".join(_constants(macros, predefined)) + "\n" + _clean(declarations)
 
 
@@ -299,16 +351,17 @@ def _c_string(text: str) -> str:
 
 def make_builder(absolute: bool = False) -> FFI:
     """The FFI builder of gearsim._gearsim (double precision), linked against
-    gearsim_core (core_library(), built before it by build_clib)."""
+    gearsim_hil and gearsim_core (c_libraries(), built before it by build_clib)."""
     cdef = generate_cdef()
     builder = FFI()
     builder.cdef(cdef + BINDINGS_CDEF)
     stored = f"static const char *const GSPY_CDEF =\n{_c_string(cdef + BINDINGS_CDEF)};\n"
     builder.set_source(
         "gearsim._gearsim",
-        '#include "gearsim/gearsim.h"\n' + SHIM + _layout_table(cdef) + stored,
-        include_dirs=[_path(INCLUDE_DIR, absolute)],
-        libraries=[CORE_LIBRARY] + ([] if sys.platform == "win32" else ["m"]),
+        CDEF_SOURCE + SHIM + _layout_table(cdef) + stored,
+        include_dirs=[_path(INCLUDE_DIR, absolute), _path(HIL_INCLUDE_DIR, absolute)],
+        # gearsim_hil calls the core: it comes first for the static linker
+        libraries=[HIL_LIBRARY, CORE_LIBRARY] + ([] if sys.platform == "win32" else ["m"]),
         extra_compile_args=wrapper_cflags(),
     )
     return builder

@@ -1,17 +1,17 @@
 /*
- * gs_fmu_model.h - the FMI variables of the gearsim rig FMUs, declared once.
+ * gs_fmu_model.h - the FMI variables of the gearsim rig FMUs.
  *
- * One table per rig (gear rig, rack rig) lists every FMI scalar variable:
- * name, type, causality, variability, unit, description and where its value
- * lives (a field of the C params, input or output structs). The inputs and
- * outputs are expanded from gearsim/fields.h (GS_RIG_INPUT_LIST,
- * GS_RIG_OUTPUT_LIST: name, unit of each rig, description), the inputs'
- * names under GS_FMU_INPUT_PREFIX, their units translated to FMI syntax by
- * gs_fmu_unit_from_table. The FMU binary
- * (gs_fmu.c) reads and writes values through it; the generator
+ * The variables of a rig (gear rig, rack rig) are expanded from the
+ * library's tables: the inputs and outputs from gearsim/fields.h
+ * (gs_rig_input_info, gs_rig_output_info: name, unit of each rig,
+ * description), the inputs' names under GS_FMU_INPUT_PREFIX; the parameters
+ * from gearsim/parameters.h (gs_rig_param_info and the block's table: name
+ * in each rig, unit, description, option list, tunable or fixed). Units are
+ * translated to FMI syntax by gs_fmu_unit_from_table. The FMU binary
+ * (gs_fmu.c) reads and writes values through the variables; the generator
  * (gs_fmu_modeldescription.c) writes modelDescription.xml and the docs table
- * from it, with start values read from gs_*_params_default(), so the two can
- * never disagree. The value reference of a variable is its index in the table.
+ * from them, with start values read from gs_*_params_default(), so the two
+ * can never disagree. The value reference of a variable is its index.
  *
  * Internal to the FMU build: not part of the gearsim C API.
  */
@@ -70,22 +70,10 @@ typedef struct {
     gs_fmu_storage storage;
     size_t offset;                 /* byte offset in gs_fmu_params / gs_rig_input / gs_rig_output */
     const char *unit;              /* a unit of gs_fmu_units(), or NULL when dimensionless */
-    const char *enum_type;         /* GS_FMU_T_ENUMERATION: a type of gs_fmu_enum_types() */
+    const char *enum_type;         /* GS_FMU_T_ENUMERATION: the name of its option list */
+    const gs_param_options *options; /* GS_FMU_T_ENUMERATION: the option list (the type's items) */
     const char *description;
 } gs_fmu_var;
-
-typedef struct {
-    const char *name;
-    int value;
-    const char *description;
-} gs_fmu_enum_item;
-
-typedef struct {
-    const char *name;
-    const char *description;
-    const gs_fmu_enum_item *items;
-    int count;
-} gs_fmu_enum_type;
 
 /* SI base-unit exponents of an FMI unit definition, plus display units. */
 typedef struct {
@@ -97,8 +85,9 @@ typedef struct {
 } gs_fmu_unit;
 
 /* Fills vars (capacity >= GS_FMU_MAX_VARS) with the variables of a rig, in
- * value-reference order; returns their count (0 if capacity is too small or
- * a unit of gearsim/fields.h has no FMI unit). */
+ * value-reference order: inputs, outputs, the rig's parameters, the block's,
+ * the block's backlash. Returns their count (0 if capacity is too small or a
+ * unit of the library's tables has no FMI unit). */
 size_t gs_fmu_variables(gs_fmu_rig rig, gs_fmu_var *vars, size_t capacity);
 
 /* Start values: the C defaults of the block and rig, and the input starts. */
@@ -109,9 +98,9 @@ void gs_fmu_defaults(gs_fmu_params *params, gs_rig_input *input);
 gs_status gs_fmu_init_rig(gs_fmu_rig rig, const gs_fmu_params *params, gs_rig_consts *consts,
                           gs_rig_state *state, gs_error *err);
 
-/* The FMI unit (a name of gs_fmu_units()) of a unit of gearsim/fields.h,
- * which are written as pint parses them ("N*m", "rad/s^2"); NULL for the
- * dimensionless "1" or "", and for a unit without an FMI definition
+/* The FMI unit (a name of gs_fmu_units()) of a unit of the library's tables,
+ * which are written as pint parses them ("N*m", "kg*m**2", "rad/s^2"); NULL
+ * for the dimensionless "1" or "", and for a unit without an FMI definition
  * (*known = 0 then; known may be NULL). */
 const char *gs_fmu_unit_from_table(const char *table_unit, int *known);
 
@@ -133,7 +122,6 @@ const char *gs_fmu_model_description(gs_fmu_rig rig);
  * string in modelDescription.xml and in the binary). */
 void gs_fmu_guid(gs_fmu_rig rig, char guid[GS_FMU_GUID_SIZE]);
 
-const gs_fmu_enum_type *gs_fmu_enum_types(size_t *count);
 const gs_fmu_unit *gs_fmu_units(size_t *count);
 
 #endif /* GS_FMU_MODEL_H */

@@ -43,32 +43,25 @@ static void put_escaped(FILE *f, const char *s)
     }
 }
 
-static const gs_fmu_enum_type *find_enum(const char *name)
+/* The first variable of its enumeration type (the type is written once, with
+ * that variable's description). */
+static int first_of_enum_type(const gs_fmu_var *vars, size_t i)
 {
-    size_t n;
-    const gs_fmu_enum_type *types = gs_fmu_enum_types(&n);
-    for (size_t i = 0; i < n; ++i) {
-        if (strcmp(types[i].name, name) == 0) {
-            return &types[i];
+    if (vars[i].type != GS_FMU_T_ENUMERATION) {
+        return 0;
+    }
+    for (size_t k = 0; k < i; ++k) {
+        if (vars[k].type == GS_FMU_T_ENUMERATION && strcmp(vars[k].enum_type, vars[i].enum_type) == 0) {
+            return 0;
         }
     }
-    return NULL;
+    return 1;
 }
 
 static int unit_used(const gs_fmu_var *vars, size_t n, const char *unit)
 {
     for (size_t i = 0; i < n; ++i) {
         if (vars[i].unit != NULL && strcmp(vars[i].unit, unit) == 0) {
-            return 1;
-        }
-    }
-    return 0;
-}
-
-static int enum_used(const gs_fmu_var *vars, size_t n, const char *type)
-{
-    for (size_t i = 0; i < n; ++i) {
-        if (vars[i].enum_type != NULL && strcmp(vars[i].enum_type, type) == 0) {
             return 1;
         }
     }
@@ -171,20 +164,18 @@ static int write_xml(gs_fmu_rig rig, const char *path)
     }
     fprintf(f, "  </UnitDefinitions>\n");
 
-    size_t ntypes;
-    const gs_fmu_enum_type *types = gs_fmu_enum_types(&ntypes);
     fprintf(f, "  <TypeDefinitions>\n");
-    for (size_t i = 0; i < ntypes; ++i) {
-        if (!enum_used(vars, n, types[i].name)) {
+    for (size_t i = 0; i < n; ++i) {
+        if (!first_of_enum_type(vars, i)) {
             continue;
         }
-        fprintf(f, "    <SimpleType name=\"%s\" description=\"", types[i].name);
-        put_escaped(f, types[i].description);
+        const gs_param_options *o = vars[i].options;
+        fprintf(f, "    <SimpleType name=\"%s\" description=\"", o->name);
+        put_escaped(f, vars[i].description);
         fprintf(f, "\">\n      <Enumeration>\n");
-        for (int k = 0; k < types[i].count; ++k) {
-            fprintf(f, "        <Item name=\"%s\" value=\"%d\" description=\"", types[i].items[k].name,
-                    types[i].items[k].value);
-            put_escaped(f, types[i].items[k].description);
+        for (size_t k = 0; k < o->count; ++k) {
+            fprintf(f, "        <Item name=\"%s\" value=\"%d\" description=\"", o->items[k].name, o->items[k].value);
+            put_escaped(f, o->items[k].doc);
             fprintf(f, "\"/>\n");
         }
         fprintf(f, "      </Enumeration>\n    </SimpleType>\n");
@@ -287,12 +278,11 @@ static void markdown_start(const gs_fmu_var *vars, size_t first, size_t count, c
         case GS_FMU_T_INTEGER: (void)snprintf(buf, size, "%d", gs_fmu_read_int(v, base)); break;
         case GS_FMU_T_BOOLEAN: (void)snprintf(buf, size, "%s", gs_fmu_read_int(v, base) ? "true" : "false"); break;
         case GS_FMU_T_ENUMERATION: {
-            const gs_fmu_enum_type *t = find_enum(v->enum_type);
             const int value = gs_fmu_read_int(v, base);
             const char *item = "?";
-            for (int k = 0; t != NULL && k < t->count; ++k) {
-                if (t->items[k].value == value) {
-                    item = t->items[k].name;
+            for (size_t k = 0; k < v->options->count; ++k) {
+                if (v->options->items[k].value == value) {
+                    item = v->options->items[k].name;
                 }
             }
             (void)snprintf(buf, size, "%d (%s)", value, item);
@@ -350,16 +340,15 @@ static int write_markdown(gs_fmu_rig rig)
                v->unit != NULL ? v->unit : (v->type == GS_FMU_T_REAL ? "1" : ""), start, v->description);
         i += count;
     }
-    size_t ntypes;
-    const gs_fmu_enum_type *types = gs_fmu_enum_types(&ntypes);
     printf("\nEnumerations (set and read with fmi2SetInteger / fmi2GetInteger):\n\n");
-    for (size_t t = 0; t < ntypes; ++t) {
-        if (!enum_used(vars, n, types[t].name)) {
+    for (size_t t = 0; t < n; ++t) {
+        if (!first_of_enum_type(vars, t)) {
             continue;
         }
-        printf("- `%s`:", types[t].name);
-        for (int k = 0; k < types[t].count; ++k) {
-            printf("%s %d = `%s`", k > 0 ? "," : "", types[t].items[k].value, types[t].items[k].name);
+        const gs_param_options *o = vars[t].options;
+        printf("- `%s`:", o->name);
+        for (size_t k = 0; k < o->count; ++k) {
+            printf("%s %d = `%s`", k > 0 ? "," : "", o->items[k].value, o->items[k].name);
         }
         printf("\n");
     }

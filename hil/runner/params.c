@@ -1,10 +1,18 @@
 /*
  * Parser of the runner's parameter file: one `key = value` per line, `#`
- * comments, keys named after the C parameter structs (block.<field>,
- * block.backlash.<field>, rig.<field>), options by their C enumerator name,
- * tables as whitespace-separated numbers. Unset keys keep the C defaults.
- * Strict: unknown or repeated keys, bad numbers and unknown options are
- * errors naming the file, line and key.
+ * comments. The keys are the members of the C parameter structs
+ * (block.<member>, block.backlash.<member>, rig.<member>) and the options
+ * their C enumerators; both are read from the library's parameter tables
+ * (gs_*_param_info, expanded from gearsim/parameters.h), so a parameter of
+ * the core is a key here without a line of this file. Tables are
+ * whitespace-separated numbers. Unset keys keep the C defaults. Strict:
+ * unknown or repeated keys, bad numbers and unknown options are errors
+ * naming the file, line and key.
+ *
+ * Two rules are the runner's own: the step (rig.dt_s) comes from --period
+ * and --substeps, and the temperature is never a CAN input, so
+ * rig.temperature_source takes GS_TEMPERATURE_FROM_MODEL only. The runner
+ * adds one key of its own, run.ambient_temperature_K.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "params.h"
@@ -14,131 +22,90 @@
 #include <stdlib.h>
 #include <string.h>
 
-typedef enum { KIND_REAL, KIND_INT, KIND_ENUM, KIND_REALS } field_kind;
+#define KEY_SIZE 80
+#define MAX_FIELDS 96
+
+/* The runner's own key: the ambient and measured temperature inputs. */
+static const gs_param_options no_options = {"", NULL, 0};
+static const gs_param_info run_info[] = {
+    {"ambient_temperature", "ambient_temperature", "ambient_temperature_K", "K", "K",
+     "ambient and measured temperature inputs (> 0)", GS_PARAM_REAL, GS_PARAM_FIXED, offsetof(runner_params, ambient_temperature_K),
+     sizeof(gs_real), 1, 1, "", "", NULL, 0, &no_options},
+};
+
+enum { GROUP_BLOCK = 0, GROUP_RIG = 1, GROUP_RUN = 2 };
+
+/* One key of the file: a leaf of a parameter table, flattened. */
+typedef struct {
+    char key[KEY_SIZE];
+    const gs_param_info *info;
+    int group;     /* which struct of runner_params it lives in */
+    size_t offset; /* byte offset in that struct */
+} field;
 
 typedef struct {
-    const char *name;
-    int value;
-} enum_option;
+    field fields[MAX_FIELDS];
+    size_t count;
+} field_list;
 
-typedef struct {
-    const char *key;
-    field_kind kind;
-    size_t offset;
-    size_t count;                /* KIND_REALS: capacity */
-    const enum_option *options;  /* KIND_ENUM: NULL-terminated */
-} field_spec;
+/* The step is the runner's: --period / --substeps, never the file. */
+static const char step_key[] = "rig.dt_s";
 
-#define OPTION(name) {#name, name}
-static const enum_option rotation_options[] = {OPTION(GS_ROTATES_SAME), OPTION(GS_ROTATES_OPPOSITE), {NULL, 0}};
-static const enum_option friction_options[] = {
-    OPTION(GS_FRICTION_NONE), OPTION(GS_FRICTION_CONSTANT_EFFICIENCY),
-    OPTION(GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY), OPTION(GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY),
-    OPTION(GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY), {NULL, 0}};
-static const enum_option smoothing_options[] = {OPTION(GS_SMOOTHING_PASSIVE), OPTION(GS_SMOOTHING_SIMSCAPE), {NULL, 0}};
-static const enum_option hard_stop_options[] = {OPTION(GS_HARD_STOP_SMOOTH), OPTION(GS_HARD_STOP_FULL_UNDAMPED),
-                                                OPTION(GS_HARD_STOP_FULL_DAMPED), {NULL, 0}};
-static const enum_option parameterization_options[] = {OPTION(GS_PARAMETERIZE_PINION_RADIUS),
-                                                       OPTION(GS_PARAMETERIZE_TOOTH_PARAMETERS), {NULL, 0}};
-static const enum_option direction_options[] = {OPTION(GS_RACK_POSITIVE), OPTION(GS_RACK_NEGATIVE), {NULL, 0}};
-static const enum_option drive_options[] = {OPTION(GS_BASE_SPEED_DRIVEN), OPTION(GS_BASE_TORQUE_DRIVEN), {NULL, 0}};
-static const enum_option temperature_options[] = {OPTION(GS_TEMPERATURE_FROM_MODEL), {NULL, 0}};
+/* Appends the leaves of table under prefix; nested groups become
+ * prefix.member.<leaf>. Returns -1 if the list or a key is too small (the
+ * tables are static: a build that trips this needs larger limits). */
+static int add_fields(field_list *list, const char *prefix, const gs_param_info *table, size_t count, int group,
+                      size_t base)
+{
+    for (size_t i = 0; i < count; ++i) {
+        const gs_param_info *e = &table[i];
+        char key[KEY_SIZE];
+        const int used = snprintf(key, sizeof key, "%s%s", prefix, e->member);
+        if (used < 0 || (size_t)used + 2 > sizeof key) {
+            return -1;
+        }
+        if (e->kind == GS_PARAM_GROUP) {
+            key[used] = '.';
+            key[used + 1] = '\0';
+            if (add_fields(list, key, e->members, e->member_count, group, base + e->offset) != 0) {
+                return -1;
+            }
+            continue;
+        }
+        if (strcmp(key, step_key) == 0) {
+            continue;
+        }
+        if (list->count == MAX_FIELDS) {
+            return -1;
+        }
+        field *f = &list->fields[list->count++];
+        memcpy(f->key, key, sizeof key);
+        f->info = e;
+        f->group = group;
+        f->offset = base + e->offset;
+    }
+    return 0;
+}
 
-#define REAL(prefix, type, member) {prefix #member, KIND_REAL, offsetof(type, member), 1, NULL}
-#define INT(prefix, type, member) {prefix #member, KIND_INT, offsetof(type, member), 1, NULL}
-#define ENUM(prefix, type, member, options) {prefix #member, KIND_ENUM, offsetof(type, member), 1, options}
-#define REALS(prefix, type, member, n) {prefix #member, KIND_REALS, offsetof(type, member), n, NULL}
+/* The keys that do not depend on the block: rig.* and run.* (run.* lives in
+ * runner_params itself: its offsets are absolute). */
+static int common_fields(field_list *list)
+{
+    list->count = 0;
+    if (add_fields(list, "rig.", gs_rig_param_info, GS_RIG_PARAM_FIELDS, GROUP_RIG, 0) != 0) {
+        return -1;
+    }
+    return add_fields(list, "run.", run_info, sizeof run_info / sizeof run_info[0], GROUP_RUN, 0);
+}
 
-#define BACKLASH_FIELDS(type)                                                      \
-    INT("block.", type, backlash.enabled),                                         \
-    ENUM("block.", type, backlash.hard_stop_model, hard_stop_options),             \
-    REAL("block.", type, backlash.linear_backlash_m),                              \
-    REAL("block.", type, backlash.base_radius_m),                                  \
-    REAL("block.", type, backlash.transition_region_m),                            \
-    REAL("block.", type, backlash.stiffness_N_m),                                  \
-    REAL("block.", type, backlash.damping_N_s_m),                                  \
-    REAL("block.", type, backlash.initial_position_m),                             \
-    INT("block.", type, backlash.no_pull),                                         \
-    INT("block.", type, backlash.lock_enabled),                                    \
-    REAL("block.", type, backlash.contact_speed_threshold_m_s),                    \
-    REAL("block.", type, backlash.contact_release_force_N)
-
-static const field_spec gear_fields[] = {
-    REAL("block.", gs_simple_gear_params, teeth_ratio),
-    ENUM("block.", gs_simple_gear_params, output_shaft_rotates, rotation_options),
-    ENUM("block.", gs_simple_gear_params, friction_model, friction_options),
-    ENUM("block.", gs_simple_gear_params, loss_smoothing, smoothing_options),
-    REAL("block.", gs_simple_gear_params, efficiency_const),
-    REAL("block.", gs_simple_gear_params, power_threshold_W),
-    REAL("block.", gs_simple_gear_params, idle_torque_Nm),
-    REAL("block.", gs_simple_gear_params, nominal_output_torque_Nm),
-    REAL("block.", gs_simple_gear_params, efficiency_nominal),
-    REAL("block.", gs_simple_gear_params, speed_threshold_rad_s),
-    INT("block.", gs_simple_gear_params, temperature_count),
-    REALS("block.", gs_simple_gear_params, temperature_vector_K, GS_TABLE_MAX),
-    REALS("block.", gs_simple_gear_params, efficiency_vector, GS_TABLE_MAX),
-    INT("block.", gs_simple_gear_params, load_count),
-    REALS("block.", gs_simple_gear_params, load_vector_Nm, GS_TABLE_MAX),
-    REALS("block.", gs_simple_gear_params, efficiency_matrix, GS_TABLE_MAX * GS_TABLE_MAX),
-    BACKLASH_FIELDS(gs_simple_gear_params),
-    REALS("block.", gs_simple_gear_params, viscous_coefficients, 2),
-    REAL("block.", gs_simple_gear_params, thermal_mass_J_K),
-    REAL("block.", gs_simple_gear_params, initial_temperature_K),
-};
-
-static const field_spec rack_fields[] = {
-    ENUM("block.", gs_rack_pinion_params, parameterization, parameterization_options),
-    REAL("block.", gs_rack_pinion_params, pinion_radius_m),
-    REAL("block.", gs_rack_pinion_params, teeth_count),
-    REAL("block.", gs_rack_pinion_params, spacing_m),
-    ENUM("block.", gs_rack_pinion_params, rack_directionality, direction_options),
-    ENUM("block.", gs_rack_pinion_params, friction_model, friction_options),
-    ENUM("block.", gs_rack_pinion_params, loss_smoothing, smoothing_options),
-    REAL("block.", gs_rack_pinion_params, efficiency_const),
-    INT("block.", gs_rack_pinion_params, temperature_count),
-    REALS("block.", gs_rack_pinion_params, temperature_vector_K, GS_TABLE_MAX),
-    REALS("block.", gs_rack_pinion_params, efficiency_vector, GS_TABLE_MAX),
-    REAL("block.", gs_rack_pinion_params, power_threshold_W),
-    REAL("block.", gs_rack_pinion_params, pinion_viscous_coefficient),
-    REAL("block.", gs_rack_pinion_params, rack_viscous_coefficient),
-    REAL("block.", gs_rack_pinion_params, thermal_mass_J_K),
-    REAL("block.", gs_rack_pinion_params, initial_temperature_K),
-    BACKLASH_FIELDS(gs_rack_pinion_params),
-};
-
-/* dt_s is not here: the runner sets it from --period / --substeps. */
-static const field_spec rig_fields[] = {
-    ENUM("rig.", gs_rig_params, base_drive, drive_options),
-    REAL("rig.", gs_rig_params, base_inertia_kg_m2),
-    REAL("rig.", gs_rig_params, initial_base_speed_rad_s),
-    REAL("rig.", gs_rig_params, driven_inertia),
-    REAL("rig.", gs_rig_params, load_coulomb_friction),
-    REAL("rig.", gs_rig_params, load_coulomb_speed_threshold),
-    REAL("rig.", gs_rig_params, load_offset),
-    INT("rig.", gs_rig_params, heat_path),
-    REAL("rig.", gs_rig_params, thermal_resistance_K_W),
-    ENUM("rig.", gs_rig_params, temperature_source, temperature_options),
-    REAL("rig.", gs_rig_params, accel_filter_time_constant_s),
-    INT("rig.", gs_rig_params, contact_substeps),
-    REAL("rig.", gs_rig_params, load_breakaway_friction),
-    REAL("rig.", gs_rig_params, load_stribeck_speed),
-    REAL("rig.", gs_rig_params, compliance_stiffness_Nm_rad),
-    REAL("rig.", gs_rig_params, compliance_damping_Nm_s_rad),
-    REALS("rig.", gs_rig_params, ripple_revolution_amplitude_Nm, GS_RIPPLE_HARMONICS),
-    REALS("rig.", gs_rig_params, ripple_revolution_phase_rad, GS_RIPPLE_HARMONICS),
-    REALS("rig.", gs_rig_params, ripple_mesh_amplitude_Nm, GS_RIPPLE_HARMONICS),
-    REALS("rig.", gs_rig_params, ripple_mesh_phase_rad, GS_RIPPLE_HARMONICS),
-    INT("rig.", gs_rig_params, ripple_mesh_teeth),
-    INT("rig.", gs_rig_params, load_friction_regularised),
-    INT("rig.", gs_rig_params, base_speed_ramp),
-};
-
-static const field_spec run_fields[] = {
-    REAL("run.", runner_params, ambient_temperature_K),
-};
-
-#define COUNT(a) (sizeof(a) / sizeof((a)[0]))
-#define MAX_FIELDS 64
+/* Appends the block.* keys of one block. */
+static int block_fields(field_list *list, gs_rig_block block)
+{
+    const int gear = block == GS_RIG_SIMPLE_GEAR;
+    return add_fields(list, "block.", gear ? gs_simple_gear_param_info : gs_rack_pinion_param_info,
+                      gear ? (size_t)GS_SIMPLE_GEAR_PARAM_FIELDS : (size_t)GS_RACK_PINION_PARAM_FIELDS, GROUP_BLOCK,
+                      0);
+}
 
 typedef struct {
     const char *path;
@@ -173,72 +140,126 @@ static int parse_real(const char *text, double *value)
     return end != text && *end == '\0' && errno == 0 && isfinite(*value) ? 0 : -1;
 }
 
-static int set_field(const parse_context *ctx, const field_spec *f, char *value, void *base)
+/* Stores an int or enum value in a member of size bytes (enums may be
+ * narrower than int on some ABIs). */
+static void store_int(unsigned char *where, size_t size, int value)
 {
-    char *where = (char *)base + f->offset;
-    double x = 0.0;
-    if (f->kind == KIND_REAL) {
-        if (parse_real(value, &x) != 0) {
-            return parse_error(ctx, f->key, "not a finite number");
-        }
-        *(gs_real *)(void *)where = (gs_real)x;
-        return 0;
+    if (size == sizeof(int)) {
+        memcpy(where, &value, sizeof value);
+    } else if (size == sizeof(short)) {
+        const short narrow = (short)value;
+        memcpy(where, &narrow, sizeof narrow);
+    } else {
+        *where = (unsigned char)value;
     }
-    if (f->kind == KIND_INT) {
-        char *end = NULL;
-        errno = 0;
-        long n = strtol(value, &end, 10);
-        if (end == value || *end != '\0' || errno != 0 || n < -1000000 || n > 1000000) {
-            return parse_error(ctx, f->key, "not an integer");
-        }
-        *(int *)(void *)where = (int)n;
-        return 0;
+}
+
+static int set_integer(const parse_context *ctx, const field *f, const char *value, unsigned char *where)
+{
+    char *end = NULL;
+    errno = 0;
+    long n = strtol(value, &end, 10);
+    if (end == value || *end != '\0' || errno != 0 || n < -1000000 || n > 1000000) {
+        return parse_error(ctx, f->key, "not an integer");
     }
-    if (f->kind == KIND_ENUM) {
-        for (const enum_option *o = f->options; o->name != NULL; ++o) {
-            if (strcmp(o->name, value) == 0) {
-                memcpy(where, &o->value, sizeof o->value); /* the C enums here are int-sized */
-                return 0;
+    store_int(where, f->info->size, (int)n);
+    return 0;
+}
+
+static int set_option(const parse_context *ctx, const field *f, const char *value, unsigned char *where)
+{
+    const gs_param_options *o = f->info->options;
+    for (size_t k = 0; k < o->count; ++k) {
+        if (strcmp(o->items[k].enumerator, value) == 0) {
+            if (strcmp(f->key, "rig.temperature_source") == 0 && o->items[k].value != GS_TEMPERATURE_FROM_MODEL) {
+                return parse_error(ctx, f->key, "the temperature is never a CAN input: only GS_TEMPERATURE_FROM_MODEL");
             }
+            store_int(where, f->info->size, o->items[k].value);
+            return 0;
         }
-        char what[256];
-        int used = snprintf(what, sizeof what, "unknown option '%.60s'; one of", value);
-        for (const enum_option *o = f->options; o->name != NULL && used > 0 && (size_t)used < sizeof what; ++o) {
-            used += snprintf(what + used, sizeof what - (size_t)used, " %s", o->name);
-        }
-        return parse_error(ctx, f->key, what);
     }
+    char what[320];
+    int used = snprintf(what, sizeof what, "unknown option '%.60s'; one of", value);
+    for (size_t k = 0; k < o->count && used > 0 && (size_t)used < sizeof what; ++k) {
+        used += snprintf(what + used, sizeof what - (size_t)used, " %s", o->items[k].enumerator);
+    }
+    return parse_error(ctx, f->key, what);
+}
+
+static int set_reals(const parse_context *ctx, const field *f, char *value, unsigned char *where)
+{
+    const size_t capacity = f->info->length * f->info->columns;
     size_t n = 0;
+    double x = 0.0;
     char *save = NULL;
     for (char *tok = strtok_r(value, " \t", &save); tok != NULL; tok = strtok_r(NULL, " \t", &save)) {
-        if (n == f->count) {
+        if (n == capacity) {
             char what[80];
-            snprintf(what, sizeof what, "more than %zu numbers", f->count);
+            snprintf(what, sizeof what, "more than %zu numbers", capacity);
             return parse_error(ctx, f->key, what);
         }
         if (parse_real(tok, &x) != 0) {
-            return parse_error(ctx, f->key, "not a list of finite numbers");
+            return parse_error(ctx, f->key, capacity > 1 ? "not a list of finite numbers" : "not a finite number");
         }
-        ((gs_real *)(void *)where)[n++] = (gs_real)x;
+        const gs_real r = (gs_real)x;
+        memcpy(where + n * sizeof r, &r, sizeof r);
+        ++n;
     }
     return n == 0 ? parse_error(ctx, f->key, "no value") : 0;
 }
 
-static const field_spec *find_field(const field_spec *fields, size_t n, const char *key, size_t *index)
+static int set_field(const parse_context *ctx, const field *f, char *value, unsigned char *where)
 {
-    for (size_t i = 0; i < n; ++i) {
-        if (strcmp(fields[i].key, key) == 0) {
-            *index = i;
-            return &fields[i];
-        }
+    switch (f->info->kind) {
+    case GS_PARAM_OPTION: return set_option(ctx, f, value, where);
+    case GS_PARAM_BOOL:
+        return f->info->options->count > 0 ? set_option(ctx, f, value, where) : set_integer(ctx, f, value, where);
+    case GS_PARAM_INT:
+    case GS_PARAM_COUNT: return set_integer(ctx, f, value, where);
+    case GS_PARAM_REAL:
+    case GS_PARAM_ARRAY:
+    case GS_PARAM_TABLE:
+    case GS_PARAM_MATRIX: return set_reals(ctx, f, value, where);
+    case GS_PARAM_GROUP: break; /* flattened by add_fields */
     }
-    return NULL;
+    return parse_error(ctx, f->key, "not a value");
 }
 
 typedef struct {
     int block_seen;
-    unsigned char seen[4][MAX_FIELDS]; /* block, rig, run: no key twice */
+    field_list keys;
+    unsigned char seen[MAX_FIELDS]; /* no key twice */
 } parse_state;
+
+static unsigned char *group_base(runner_params *out, int group)
+{
+    switch (group) {
+    case GROUP_BLOCK:
+        return out->block == GS_RIG_SIMPLE_GEAR ? (unsigned char *)&out->gear : (unsigned char *)&out->rack;
+    case GROUP_RIG: return (unsigned char *)&out->rig;
+    default: return (unsigned char *)out;
+    }
+}
+
+static int parse_block_line(parse_context *ctx, parse_state *st, const char *key, const char *value,
+                            runner_params *out)
+{
+    if (st->block_seen) {
+        return parse_error(ctx, key, "given twice");
+    }
+    if (strcmp(value, "simple_gear") == 0) {
+        out->block = GS_RIG_SIMPLE_GEAR;
+    } else if (strcmp(value, "rack_pinion") == 0) {
+        out->block = GS_RIG_RACK_PINION;
+    } else {
+        return parse_error(ctx, key, "must be simple_gear or rack_pinion");
+    }
+    if (block_fields(&st->keys, out->block) != 0) {
+        return parse_error(ctx, key, "internal: the parameter tables exceed the parser's limits");
+    }
+    st->block_seen = 1;
+    return 0;
+}
 
 static int parse_line(parse_context *ctx, parse_state *st, char *line, runner_params *out)
 {
@@ -261,56 +282,36 @@ static int parse_line(parse_context *ctx, parse_state *st, char *line, runner_pa
         return parse_error(ctx, key, "no value");
     }
     if (strcmp(key, "block") == 0) {
-        if (st->block_seen) {
-            return parse_error(ctx, key, "given twice");
-        }
-        if (strcmp(value, "simple_gear") == 0) {
-            out->block = GS_RIG_SIMPLE_GEAR;
-        } else if (strcmp(value, "rack_pinion") == 0) {
-            out->block = GS_RIG_RACK_PINION;
-        } else {
-            return parse_error(ctx, key, "must be simple_gear or rack_pinion");
-        }
-        st->block_seen = 1;
-        return 0;
+        return parse_block_line(ctx, st, key, value, out);
     }
-    const field_spec *fields = NULL;
-    size_t n = 0;
-    void *base = NULL;
-    int group = 0;
-    if (strncmp(key, "block.", 6) == 0) {
-        if (!st->block_seen) {
-            return parse_error(ctx, key, "comes before the 'block = simple_gear|rack_pinion' line");
+    if (strcmp(key, step_key) == 0) {
+        return parse_error(ctx, key, "the step is set by --period and --substeps, not in the file");
+    }
+    if (!st->block_seen && strncmp(key, "block.", 6) == 0) {
+        return parse_error(ctx, key, "comes before the 'block = simple_gear|rack_pinion' line");
+    }
+    for (size_t i = 0; i < st->keys.count; ++i) {
+        const field *f = &st->keys.fields[i];
+        if (strcmp(f->key, key) == 0) {
+            if (st->seen[i]) {
+                return parse_error(ctx, key, "given twice");
+            }
+            st->seen[i] = 1;
+            return set_field(ctx, f, value, group_base(out, f->group) + f->offset);
         }
-        int gear = out->block == GS_RIG_SIMPLE_GEAR;
-        fields = gear ? gear_fields : rack_fields;
-        n = gear ? COUNT(gear_fields) : COUNT(rack_fields);
-        base = gear ? (void *)&out->gear : (void *)&out->rack;
-    } else if (strncmp(key, "rig.", 4) == 0) {
-        if (strcmp(key, "rig.dt_s") == 0) {
-            return parse_error(ctx, key, "the step is set by --period and --substeps, not in the file");
-        }
-        fields = rig_fields, n = COUNT(rig_fields), base = &out->rig, group = 1;
-    } else if (strncmp(key, "run.", 4) == 0) {
-        fields = run_fields, n = COUNT(run_fields), base = out, group = 2;
     }
-    size_t index = 0;
-    const field_spec *f = fields != NULL ? find_field(fields, n, key, &index) : NULL;
-    if (f == NULL) {
-        return parse_error(ctx, key, "unknown key (gearsim-hil --list-params lists them)");
-    }
-    if (st->seen[group][index]) {
-        return parse_error(ctx, key, "given twice");
-    }
-    st->seen[group][index] = 1;
-    return set_field(ctx, f, value, base);
+    return parse_error(ctx, key, "unknown key (gearsim-hil --list-params lists them)");
 }
 
 int runner_params_load(const char *path, runner_params *out, char *message, size_t message_size)
 {
     parse_context ctx = {path, 0, message, message_size};
-    parse_state st;
+    static parse_state st; /* a few kB: not on the stack */
     memset(&st, 0, sizeof st);
+    if (common_fields(&st.keys) != 0) {
+        snprintf(message, message_size, "%s: internal: the parameter tables exceed the parser's limits", path);
+        return -1;
+    }
     memset(out, 0, sizeof *out);
     out->gear = gs_simple_gear_params_default();
     out->rack = gs_rack_pinion_params_default();
@@ -343,17 +344,26 @@ int runner_params_load(const char *path, runner_params *out, char *message, size
     return rc;
 }
 
-static void list_fields(FILE *stream, const char *block, const field_spec *fields, size_t n)
-{
-    for (size_t i = 0; i < n; ++i) {
-        fprintf(stream, "%s %s\n", block, fields[i].key);
-    }
-}
-
 void runner_params_list(FILE *stream)
 {
-    list_fields(stream, "simple_gear", gear_fields, COUNT(gear_fields));
-    list_fields(stream, "rack_pinion", rack_fields, COUNT(rack_fields));
-    list_fields(stream, "rig", rig_fields, COUNT(rig_fields));
-    list_fields(stream, "run", run_fields, COUNT(run_fields));
+    static field_list list;
+    static const struct {
+        gs_rig_block block;
+        const char *name;
+    } blocks[] = {{GS_RIG_SIMPLE_GEAR, "simple_gear"}, {GS_RIG_RACK_PINION, "rack_pinion"}};
+    for (size_t b = 0; b < sizeof blocks / sizeof blocks[0]; ++b) {
+        list.count = 0;
+        if (block_fields(&list, blocks[b].block) != 0) {
+            return;
+        }
+        for (size_t i = 0; i < list.count; ++i) {
+            fprintf(stream, "%s %s\n", blocks[b].name, list.fields[i].key);
+        }
+    }
+    if (common_fields(&list) != 0) {
+        return;
+    }
+    for (size_t i = 0; i < list.count; ++i) {
+        fprintf(stream, "%s %s\n", list.fields[i].group == GROUP_RIG ? "rig" : "run", list.fields[i].key);
+    }
 }

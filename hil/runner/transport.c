@@ -1,16 +1,25 @@
 /*
- * Transports of the runner. Inside the paced loop only read(), write() and
- * hand-written formatting run here: no stdio, no heap, nothing that blocks
- * (every descriptor is O_NONBLOCK).
+ * Transports of the runner: file descriptors (pipes, FIFOs, files, a CAN_RAW
+ * socket), read and written without blocking (every descriptor is
+ * O_NONBLOCK). The text of the candump transport is candump.c's. Inside the
+ * paced loop only read(), write() and that formatting run here: no stdio, no
+ * heap, nothing that blocks.
  */
 #define _GNU_SOURCE
 #include "transport.h"
 
+#include "candump.h"
+
+#include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
-#include <math.h>
 #include <net/if.h>
+#include <math.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <poll.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/ioctl.h>
@@ -20,182 +29,6 @@
 
 #include <linux/can.h>
 #include <linux/can/raw.h>
-
-/* python-can marks error frames with these bits of the ID (can/io/canutils.py). */
-#define CANDUMP_ERR_FLAG 0x20000000u
-#define CANDUMP_ERR_BUSERROR 0x00000080u
-#define CANDUMP_MAX_DATA 64u
-
-static int hex_digit(char c)
-{
-    if (c >= '0' && c <= '9') {
-        return c - '0';
-    }
-    if (c >= 'a' && c <= 'f') {
-        return c - 'a' + 10;
-    }
-    if (c >= 'A' && c <= 'F') {
-        return c - 'A' + 10;
-    }
-    return -1;
-}
-
-static int is_space(char c)
-{
-    return c == ' ' || c == '\t' || c == '\r' || c == '\n';
-}
-
-/* "(seconds)" as a double: digits, one optional '.', digits (no exponent). */
-static int parse_stamp(const char *s, const char *end, double *value)
-{
-    double whole = 0.0, scale = 1.0, frac = 0.0;
-    int digits = 0, dot = 0;
-    for (; s < end; ++s) {
-        if (*s == '.' && !dot) {
-            dot = 1;
-        } else if (*s >= '0' && *s <= '9') {
-            if (dot) {
-                scale /= 10.0;
-                frac += (double)(*s - '0') * scale;
-            } else {
-                whole = whole * 10.0 + (double)(*s - '0');
-            }
-            ++digits;
-        } else {
-            return -1;
-        }
-    }
-    *value = whole + frac;
-    return digits > 0 ? 0 : -1;
-}
-
-int candump_parse_line(const char *line, size_t length, gs_hil_frame *frame)
-{
-    const char *p = line, *end = line + length;
-    const char *tok[4];
-    const char *tok_end[4];
-    int n = 0;
-    while (p < end) {
-        while (p < end && is_space(*p)) {
-            ++p;
-        }
-        if (p == end) {
-            break;
-        }
-        if (n == 4) {
-            return -1;
-        }
-        tok[n] = p;
-        while (p < end && !is_space(*p)) {
-            ++p;
-        }
-        tok_end[n++] = p;
-    }
-    if (n < 3 || tok[0][0] != '(' || tok_end[0][-1] != ')') {
-        return -1;
-    }
-    memset(frame, 0, sizeof *frame);
-    if (parse_stamp(tok[0] + 1, tok_end[0] - 1, &frame->timestamp_s) != 0) {
-        return -1;
-    }
-    const char *f = tok[2], *fend = tok_end[2];
-    const char *hash = memchr(f, '#', (size_t)(fend - f));
-    if (hash == NULL || hash == f || hash - f > 8) {
-        return -1;
-    }
-    uint32_t id = 0;
-    for (const char *c = f; c < hash; ++c) {
-        int d = hex_digit(*c);
-        if (d < 0) {
-            return -1;
-        }
-        id = (id << 4) | (uint32_t)d;
-    }
-    frame->is_extended = (hash - f) > 3; /* python-can's rule: more than 3 hex digits */
-    const char *data = hash + 1;
-    if (data < fend && *data == '#') { /* CAN FD: "##<flags><data>" */
-        if (data + 1 >= fend || hex_digit(data[1]) < 0) {
-            return -1;
-        }
-        data += 2;
-    }
-    if ((id & CANDUMP_ERR_FLAG) != 0u && (id & CANDUMP_ERR_BUSERROR) != 0u) {
-        frame->is_error = 1;
-        return 0;
-    }
-    frame->id = id & 0x1FFFFFFFu;
-    if (data < fend && (*data == 'R' || *data == 'r')) {
-        frame->is_remote = 1;
-        return 0;
-    }
-    size_t hex = (size_t)(fend - data);
-    if (hex % 2u != 0u || hex / 2u > CANDUMP_MAX_DATA) {
-        return -1;
-    }
-    for (size_t i = 0; i < hex / 2u; ++i) {
-        int hi = hex_digit(data[2u * i]), lo = hex_digit(data[2u * i + 1u]);
-        if (hi < 0 || lo < 0) {
-            return -1;
-        }
-        if (i < GS_HIL_MAX_DATA) {
-            frame->data[i] = (uint8_t)(hi * 16 + lo);
-        }
-    }
-    /* longer than classic CAN: kept as a length, so the bridge counts it bad_length */
-    frame->length = (unsigned)(hex / 2u);
-    return 0;
-}
-
-static size_t put_unsigned(char *out, uint64_t value, unsigned min_digits)
-{
-    char tmp[24];
-    unsigned n = 0;
-    do {
-        tmp[n++] = (char)('0' + (int)(value % 10u));
-        value /= 10u;
-    } while (value != 0u || n < min_digits);
-    for (unsigned i = 0; i < n; ++i) {
-        out[i] = tmp[n - 1u - i];
-    }
-    return n;
-}
-
-static size_t put_hex(char *out, uint32_t value, unsigned digits)
-{
-    static const char hexchars[] = "0123456789ABCDEF";
-    for (unsigned i = 0; i < digits; ++i) {
-        out[i] = hexchars[(value >> (4u * (digits - 1u - i))) & 0xFu];
-    }
-    return digits;
-}
-
-size_t candump_format_line(const gs_hil_frame *frame, double stamp_s, const char *channel, char *out,
-                           size_t size)
-{
-    size_t channel_len = strlen(channel);
-    if (size < 64u + channel_len || !(stamp_s >= 0.0 && stamp_s < 1e12)) {
-        return 0;
-    }
-    uint64_t micros = (uint64_t)llround(stamp_s * 1e6);
-    size_t n = 0;
-    out[n++] = '(';
-    n += put_unsigned(out + n, micros / 1000000u, 1);
-    out[n++] = '.';
-    n += put_unsigned(out + n, micros % 1000000u, 6);
-    out[n++] = ')';
-    out[n++] = ' ';
-    memcpy(out + n, channel, channel_len);
-    n += channel_len;
-    out[n++] = ' ';
-    n += put_hex(out + n, frame->id, frame->is_extended ? 8u : 3u);
-    out[n++] = '#';
-    unsigned length = frame->length < GS_HIL_MAX_DATA ? frame->length : GS_HIL_MAX_DATA;
-    for (unsigned i = 0; i < length; ++i) {
-        n += put_hex(out + n, frame->data[i], 2u);
-    }
-    memcpy(out + n, " T\n", 3u);
-    return n + 3u;
-}
 
 static int set_nonblocking(int fd)
 {
@@ -221,6 +54,11 @@ static void init_common(transport *t, transport_kind kind)
     t->malformed_lines = 0;
     t->write_errors = 0;
     t->channel = "can0";
+    t->listen_fd = -1;
+    t->sc_state = SC_NONE;
+    t->sc_send_from = 0.0;
+    t->connects = t->disconnects = 0;
+    t->listen_on[0] = '\0';
 }
 
 int transport_open_candump(transport *t, const char *rx_path, const char *tx_path, char *message, size_t size)
@@ -332,12 +170,8 @@ static unsigned take_lines(transport *t, double now_s, transport_handler handler
             t->rx_overlong = 0;
             continue;
         }
-        size_t k = 0;
-        while (k < len && is_space(line[k])) {
-            ++k;
-        }
-        if (k == len) {
-            continue; /* empty line */
+        if (candump_is_blank(line, len)) {
+            continue;
         }
         gs_hil_frame frame;
         if (candump_parse_line(line, len, &frame) != 0) {
@@ -378,10 +212,234 @@ static unsigned poll_candump(transport *t, double now_s, transport_handler handl
     return n;
 }
 
+/* ---- socketcand ------------------------------------------------------------------ */
+
+int transport_open_socketcand(transport *t, const char *listen_spec, const char *bus, char *message, size_t size)
+{
+    init_common(t, TRANSPORT_SOCKETCAND);
+    t->channel = bus;
+    char host[64];
+    const char *colon = strrchr(listen_spec, ':');
+    char *end = NULL;
+    long port = colon != NULL ? strtol(colon + 1, &end, 10) : -1;
+    if (colon == NULL || (size_t)(colon - listen_spec) >= sizeof host || end == colon + 1 || *end != '\0' ||
+        port < 0 || port > 65535) {
+        snprintf(message, size, "--listen %s: expected HOST:PORT (e.g. 127.0.0.1:29536)", listen_spec);
+        return -1;
+    }
+    snprintf(host, sizeof host, "%.*s", (int)(colon - listen_spec), listen_spec);
+    struct sockaddr_in addr;
+    memset(&addr, 0, sizeof addr);
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons((uint16_t)port);
+    if (inet_pton(AF_INET, host, &addr.sin_addr) != 1) {
+        snprintf(message, size, "--listen %s: %s is not an IPv4 address", listen_spec, host);
+        return -1;
+    }
+    int fd = socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    int one = 1;
+    if (fd < 0 || setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) != 0 ||
+        bind(fd, (struct sockaddr *)(void *)&addr, sizeof addr) != 0 || listen(fd, 4) != 0) {
+        int e = errno;
+        if (fd >= 0) {
+            close(fd);
+        }
+        snprintf(message, size, "--listen %s: cannot listen there: %s", listen_spec, strerror(e));
+        return -1;
+    }
+    socklen_t len = sizeof addr;
+    getsockname(fd, (struct sockaddr *)(void *)&addr, &len);
+    snprintf(t->listen_on, sizeof t->listen_on, "%s:%u", host, (unsigned)ntohs(addr.sin_port));
+    t->listen_fd = fd;
+    return 0;
+}
+
+static void sc_write_now(transport *t, const char *text)
+{
+    /* a handshake answer: a few bytes to a socket that has room for them */
+    (void)send(t->rx_fd, text, strlen(text), MSG_NOSIGNAL | MSG_DONTWAIT);
+}
+
+static void sc_disconnect(transport *t)
+{
+    if (t->rx_fd >= 0) {
+        close(t->rx_fd);
+        t->disconnects++;
+    }
+    t->rx_fd = t->tx_fd = -1;
+    t->sc_state = SC_NONE;
+    t->rx_len = 0;
+    t->rx_overlong = 0;
+    t->tx_start = t->tx_end = 0; /* what was queued for that client goes nowhere */
+}
+
+static void sc_accept(transport *t)
+{
+    for (;;) {
+        int fd = accept4(t->listen_fd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC);
+        if (fd < 0) {
+            return; /* EAGAIN: nobody waiting */
+        }
+        if (t->rx_fd >= 0) {
+            sc_disconnect(t); /* one client at a time: the newest (a client that came back) */
+        }
+        int one = 1;
+        (void)setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+        t->rx_fd = t->tx_fd = fd;
+        t->connects++;
+        t->sc_state = SC_GREETED;
+        sc_write_now(t, "< hi >");
+    }
+}
+
+static int hex_value(const char *s, unsigned long *out)
+{
+    char *end = NULL;
+    if (*s == '\0') {
+        return -1;
+    }
+    *out = strtoul(s, &end, 16);
+    return *end == '\0' ? 0 : -1;
+}
+
+/* "send ID DLC B0 B1 ..." (words) -> a frame; 0, or -1 when it is not one. */
+static int sc_frame(char **word, int words, gs_hil_frame *frame)
+{
+    unsigned long id, dlc, byte;
+    if (words < 3 || hex_value(word[1], &id) != 0 || hex_value(word[2], &dlc) != 0 || dlc > GS_HIL_MAX_DATA ||
+        (unsigned long)(words - 3) != dlc || id > 0x1FFFFFFFul) {
+        return -1;
+    }
+    memset(frame, 0, sizeof *frame);
+    frame->id = (uint32_t)id;
+    frame->is_extended = strlen(word[1]) > 3u || id > 0x7FFul;
+    frame->length = (unsigned)dlc;
+    for (int i = 0; i < (int)dlc; ++i) {
+        if (hex_value(word[3 + i], &byte) != 0 || byte > 0xFFul) {
+            return -1;
+        }
+        frame->data[i] = (uint8_t)byte;
+    }
+    return 0;
+}
+
+/* One "< ... >" message of the client (text without the brackets). */
+static unsigned sc_message(transport *t, char *text, double now_s, transport_handler handler, void *context)
+{
+    char *word[4 + GS_HIL_MAX_DATA];
+    int words = 0;
+    for (char *save = NULL, *w = strtok_r(text, " \t\r\n", &save); w != NULL && words < (int)(sizeof word / sizeof word[0]);
+         w = strtok_r(NULL, " \t\r\n", &save)) {
+        word[words++] = w;
+    }
+    if (words == 0) {
+        t->malformed_lines++;
+        return 0;
+    }
+    if (strcmp(word[0], "echo") == 0) {
+        sc_write_now(t, "< echo >");
+    } else if (t->sc_state == SC_GREETED && strcmp(word[0], "open") == 0 && words == 2) {
+        if (strcmp(word[1], t->channel) == 0) {
+            t->sc_state = SC_OPEN;
+            sc_write_now(t, "< ok >");
+        } else {
+            sc_write_now(t, "< error could not open bus >");
+        }
+    } else if (t->sc_state == SC_OPEN && strcmp(word[0], "rawmode") == 0) {
+        t->sc_state = SC_RAW;
+        t->sc_send_from = now_s + SOCKETCAND_GRACE_S;
+        sc_write_now(t, "< ok >");
+    } else if (t->sc_state == SC_RAW && strcmp(word[0], "send") == 0) {
+        gs_hil_frame frame;
+        if (sc_frame(word, words, &frame) == 0) {
+            frame.timestamp_s = now_s;
+            handler(context, &frame);
+            return 1;
+        }
+        t->malformed_lines++;
+    } else {
+        t->malformed_lines++; /* in raw mode nothing else is answered: a client reads answers as frames */
+    }
+    return 0;
+}
+
+/* The complete messages in the buffer; a partial one waits for its end. */
+static unsigned sc_take(transport *t, double now_s, transport_handler handler, void *context)
+{
+    unsigned n = 0;
+    size_t start = 0;
+    for (;;) {
+        char *open = memchr(t->rx_buf + start, '<', t->rx_len - start);
+        if (open == NULL) {
+            start = t->rx_len; /* text outside brackets: dropped */
+            break;
+        }
+        char *close_ = memchr(open, '>', (size_t)(t->rx_buf + t->rx_len - open));
+        if (close_ == NULL) {
+            start = (size_t)(open - t->rx_buf);
+            break;
+        }
+        *close_ = '\0';
+        n += sc_message(t, open + 1, now_s, handler, context);
+        start = (size_t)(close_ - t->rx_buf) + 1u;
+    }
+    memmove(t->rx_buf, t->rx_buf + start, t->rx_len - start);
+    t->rx_len -= start;
+    if (t->rx_len == sizeof t->rx_buf) {
+        t->malformed_lines++;
+        t->rx_len = 0;
+    }
+    return n;
+}
+
+static unsigned poll_socketcand(transport *t, double now_s, transport_handler handler, void *context)
+{
+    sc_accept(t);
+    unsigned n = 0;
+    while (t->rx_fd >= 0) {
+        ssize_t got = recv(t->rx_fd, t->rx_buf + t->rx_len, sizeof t->rx_buf - t->rx_len, MSG_DONTWAIT);
+        if (got > 0) {
+            t->rx_len += (size_t)got;
+            n += sc_take(t, now_s, handler, context);
+            continue;
+        }
+        if (got < 0 && errno == EINTR) {
+            continue;
+        }
+        if (got == 0 || (errno != EAGAIN && errno != EWOULDBLOCK)) {
+            if (t->rx_len > 0u) {
+                t->malformed_lines++; /* a message cut by the disconnect */
+            }
+            sc_disconnect(t); /* everything it sent before is handled above */
+        }
+        break;
+    }
+    return n;
+}
+
 unsigned transport_poll(transport *t, double now_s, transport_handler handler, void *context)
 {
-    return t->kind == TRANSPORT_SOCKETCAN ? poll_socketcan(t, now_s, handler, context)
-                                          : poll_candump(t, now_s, handler, context);
+    switch (t->kind) {
+    case TRANSPORT_SOCKETCAN: return poll_socketcan(t, now_s, handler, context);
+    case TRANSPORT_SOCKETCAND: return poll_socketcand(t, now_s, handler, context);
+    case TRANSPORT_CANDUMP:
+    default: return poll_candump(t, now_s, handler, context);
+    }
+}
+
+/* "< frame ID SECONDS.MICROS DATA >" of socketcand's raw mode. */
+static size_t sc_format(const gs_hil_frame *frame, double stamp_s, char *out, size_t size)
+{
+    char data[2 * GS_HIL_MAX_DATA + 1];
+    unsigned length = frame->length < GS_HIL_MAX_DATA ? frame->length : GS_HIL_MAX_DATA;
+    for (unsigned i = 0; i < length; ++i) {
+        snprintf(data + 2 * i, 3, "%02X", frame->data[i]);
+    }
+    data[2 * length] = '\0';
+    long long micros = llround(stamp_s * 1e6);
+    int n = snprintf(out, size, frame->is_extended ? "< frame %08X %lld.%06lld %s >" : "< frame %03X %lld.%06lld %s >",
+                     (unsigned)frame->id, micros / 1000000, micros % 1000000, data);
+    return n > 0 && (size_t)n < size ? (size_t)n : 0u;
 }
 
 static int send_socketcan(transport *t, const gs_hil_frame *frame)
@@ -400,6 +458,9 @@ int transport_send(transport *t, const gs_hil_frame *frame, double stamp_s)
     if (t->kind == TRANSPORT_SOCKETCAN) {
         return send_socketcan(t, frame);
     }
+    if (t->kind == TRANSPORT_SOCKETCAND && (t->sc_state != SC_RAW || stamp_s < t->sc_send_from)) {
+        return 0; /* nobody listening yet: sent into an empty bus, as on CAN */
+    }
     if (t->tx_start == t->tx_end) {
         t->tx_start = t->tx_end = 0;
     }
@@ -408,7 +469,10 @@ int transport_send(transport *t, const gs_hil_frame *frame, double stamp_s)
         t->tx_end -= t->tx_start;
         t->tx_start = 0;
     }
-    size_t n = candump_format_line(frame, stamp_s, t->channel, t->tx_buf + t->tx_end, sizeof t->tx_buf - t->tx_end);
+    size_t room = sizeof t->tx_buf - t->tx_end;
+    size_t n = t->kind == TRANSPORT_SOCKETCAND ? sc_format(frame, stamp_s, t->tx_buf + t->tx_end, room)
+                                               : candump_format_line(frame, stamp_s, t->channel, t->tx_buf + t->tx_end,
+                                                                     room);
     if (n == 0) {
         return -1; /* no room: the reader is too slow */
     }
@@ -418,6 +482,22 @@ int transport_send(transport *t, const gs_hil_frame *frame, double stamp_s)
 
 void transport_flush(transport *t)
 {
+    if (t->kind == TRANSPORT_SOCKETCAND) {
+        while (t->tx_fd >= 0 && t->tx_start < t->tx_end) {
+            ssize_t put = send(t->tx_fd, t->tx_buf + t->tx_start, t->tx_end - t->tx_start, MSG_NOSIGNAL | MSG_DONTWAIT);
+            if (put > 0) {
+                t->tx_start += (size_t)put;
+            } else if (put < 0 && errno == EINTR) {
+                continue;
+            } else {
+                if (put < 0 && errno != EAGAIN && errno != EWOULDBLOCK) {
+                    sc_disconnect(t); /* reset by the peer: the next poll sees no client */
+                }
+                break;
+            }
+        }
+        return;
+    }
     while (t->kind == TRANSPORT_CANDUMP && t->tx_start < t->tx_end) {
         ssize_t put = write(t->tx_fd, t->tx_buf + t->tx_start, t->tx_end - t->tx_start);
         if (put > 0) {
@@ -437,7 +517,9 @@ void transport_flush(transport *t)
 
 void transport_drain(transport *t, int timeout_ms)
 {
-    for (int waited = 0; t->kind == TRANSPORT_CANDUMP && t->tx_start < t->tx_end && waited < timeout_ms; waited += 10) {
+    for (int waited = 0; t->kind != TRANSPORT_SOCKETCAN && t->tx_fd >= 0 && t->tx_start < t->tx_end &&
+                         waited < timeout_ms;
+         waited += 10) {
         transport_flush(t);
         if (t->tx_start < t->tx_end) {
             struct pollfd pfd = {t->tx_fd, POLLOUT, 0};
@@ -448,6 +530,10 @@ void transport_drain(transport *t, int timeout_ms)
 
 void transport_close(transport *t)
 {
+    if (t->listen_fd >= 0) {
+        close(t->listen_fd);
+        t->listen_fd = -1;
+    }
     if (t->rx_fd > STDERR_FILENO) {
         close(t->rx_fd);
     }

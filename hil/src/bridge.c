@@ -1,42 +1,23 @@
 /*
- * The bridge's logic (gearsim/hil.h), period by period, with the semantics of
- * the Python bridge (docs/hil.md, "Time model", "Commands, modes, safe
- * state", "Frame classes and counters", "Status"): for the same frames at
- * the same periods it steps the rig with the same inputs and sends the same
- * bytes. No I/O, no heap: everything lives in the gs_hil_bridge.
+ * The bridge's logic (gearsim/hil.h), period by period: the one
+ * implementation of docs/hil.md's "Time model", "Commands, modes, safe
+ * state", "Frame classes and counters" and "Status", which the C runner and
+ * the Python bridge both run. No I/O, no heap: everything lives in the
+ * gs_hil_bridge.
  */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
-#include "gearsim/hil.h"
+#include "internal.h"
 
-#define GS_HIL_NAME_STRING_(suffix, name) #name,
-#define GS_HIL_REASON_STRING_(suffix, name) name,
-static const char *const reason_names[GS_HIL_REASONS] = {GS_HIL_REASON_LIST(GS_HIL_REASON_STRING_)};
-static const char *const count_names[GS_HIL_COUNTS] = {GS_HIL_COUNT_LIST(GS_HIL_NAME_STRING_)};
-static const char *const flag_names[GS_HIL_FLAGS] = {GS_HIL_FLAG_LIST(GS_HIL_NAME_STRING_)};
-
-/* The latched flags and the counters whose growth sets them. */
-static const gs_hil_count latched_counts[5] = {
-    GS_HIL_COUNT_RX_REJECTED, GS_HIL_COUNT_RX_LATE, GS_HIL_COUNT_SATURATIONS,
-    GS_HIL_COUNT_OVERRUNS,    GS_HIL_COUNT_TX_ERRORS,
+/* The counters whose growth sets the latched flags, in flag order from
+ * GS_HIL_FLAG_CMD_REJECTED on. */
+static const gs_hil_count latched_counts[GS_HIL_LATCHED_FLAGS] = {
+    GS_HIL_COUNT_RX_REJECTED,   GS_HIL_COUNT_RX_LATE,        GS_HIL_COUNT_SATURATIONS,
+    GS_HIL_COUNT_OVERRUNS,      GS_HIL_COUNT_TX_ERRORS,      GS_HIL_COUNT_PARAM_CHANGES,
+    GS_HIL_COUNT_PARAM_REFUSED, GS_HIL_COUNT_LOG_DROPPED,
 };
-
-const char *gs_hil_reason_name(gs_hil_reason reason)
-{
-    return (unsigned)reason < GS_HIL_REASONS ? reason_names[reason] : "?";
-}
-
-const char *gs_hil_count_name(gs_hil_count count)
-{
-    return (unsigned)count < GS_HIL_COUNTS ? count_names[count] : "?";
-}
-
-const char *gs_hil_flag_name(gs_hil_flag flag)
-{
-    return (unsigned)flag < GS_HIL_FLAGS ? flag_names[flag] : "?";
-}
 
 static gs_hil_count reason_class(gs_hil_reason reason)
 {
@@ -65,36 +46,13 @@ static gs_hil_status fail(gs_hil_error *err, const char *parameter, const char *
     return GS_HIL_E_CONFIG;
 }
 
-/* Feedback frames in sending order: the others by ID, then the status frames
- * by ID (so a status frame sees the saturations of its own period). */
-static void order_feedback(gs_hil_bridge *b)
-{
-    const gs_hil_dbc *dbc = b->config.dbc;
-    b->feedback_count = 0;
-    for (int status = 0; status <= 1; ++status) {
-        unsigned first = b->feedback_count;
-        for (unsigned i = 0; i < dbc->frame_count; ++i) {
-            const gs_hil_frame_spec *f = &dbc->frames[i];
-            if (f->kind != GS_HIL_FRAME_FEEDBACK || (f->is_status != 0) != (status != 0)) {
-                continue;
-            }
-            unsigned j = b->feedback_count++;
-            while (j > first && dbc->frames[b->feedback_order[j - 1u]].id > f->id) {
-                b->feedback_order[j] = b->feedback_order[j - 1u];
-                --j;
-            }
-            b->feedback_order[j] = i;
-        }
-    }
-}
-
 static gs_hil_status check_cycles(gs_hil_bridge *b, gs_hil_error *err)
 {
     const gs_hil_dbc *dbc = b->config.dbc;
     for (unsigned i = 0; i < dbc->frame_count; ++i) {
         const gs_hil_frame_spec *f = &dbc->frames[i];
         b->cycle_periods[i] = 0;
-        if (f->kind != GS_HIL_FRAME_FEEDBACK) {
+        if (b->kind[i] != GS_HIL_FRAME_FEEDBACK) {
             continue;
         }
         double n = ((double)f->cycle_ms / 1000.0) / b->period_s;
@@ -111,20 +69,18 @@ static gs_hil_status check_cycles(gs_hil_bridge *b, gs_hil_error *err)
     return GS_HIL_OK;
 }
 
-static gs_hil_status index_commands(gs_hil_bridge *b, gs_hil_error *err)
+static void index_frames(gs_hil_bridge *b)
 {
     const gs_hil_dbc *dbc = b->config.dbc;
     b->command_count = 0;
     for (unsigned i = 0; i < dbc->frame_count; ++i) {
         const gs_hil_frame_spec *f = &dbc->frames[i];
+        b->kind[i] = gs_hil_frame_kind_of(f);
         b->command_index[i] = 0;
-        if (f->kind != GS_HIL_FRAME_COMMAND) {
+        if (b->kind[i] != GS_HIL_FRAME_COMMAND) {
             continue;
         }
-        if (b->command_count == GS_HIL_MAX_COMMAND_FRAMES) {
-            return fail(err, "dbc", "more than 4 command frames");
-        }
-        b->command_index[i] = b->command_count++;
+        b->command_index[i] = b->command_count++; /* at most GS_HIL_MAX_COMMAND_FRAMES: gs_hil_dbc_check */
         for (unsigned s = 0; s < f->signal_count; ++s) {
             int slot = gs_hil_role_command_index(f->signals[s].role);
             if (slot >= 0) {
@@ -132,7 +88,6 @@ static gs_hil_status index_commands(gs_hil_bridge *b, gs_hil_error *err)
             }
         }
     }
-    return GS_HIL_OK;
 }
 
 gs_hil_status gs_hil_bridge_init(gs_hil_bridge *b, const gs_hil_config *config, gs_rig_block block,
@@ -142,6 +97,9 @@ gs_hil_status gs_hil_bridge_init(gs_hil_bridge *b, const gs_hil_config *config, 
         return fail(err, "bridge", "a required pointer is NULL");
     }
     memset(b, 0, sizeof *b);
+    if (gs_hil_dbc_check(config->dbc, err) != GS_HIL_OK) {
+        return GS_HIL_E_CONFIG;
+    }
     b->config = *config;
     b->consts = consts;
     b->state = state;
@@ -163,7 +121,8 @@ gs_hil_status gs_hil_bridge_init(gs_hil_bridge *b, const gs_hil_config *config, 
         return fail(err, "timeout", "timeout is too many periods");
     }
     b->timeout_periods = timeout_periods < 1.0 ? 1u : (uint64_t)timeout_periods;
-    if (index_commands(b, err) != GS_HIL_OK || check_cycles(b, err) != GS_HIL_OK) {
+    index_frames(b);
+    if (check_cycles(b, err) != GS_HIL_OK) {
         return GS_HIL_E_CONFIG;
     }
     int driving = config->base_drive == GS_BASE_SPEED_DRIVEN ? GS_HIL_CMD_BASE_SPEED : GS_HIL_CMD_BASE_TORQUE;
@@ -173,13 +132,15 @@ gs_hil_status gs_hil_bridge_init(gs_hil_bridge *b, const gs_hil_config *config, 
                         ? "the DBC has no cmd.base_speed signal, which a speed-driven rig needs"
                         : "the DBC has no cmd.base_torque signal, which a torque-driven rig needs");
     }
-    order_feedback(b);
+    b->feedback_count = gs_hil_feedback_order(config->dbc, b->feedback_order);
     b->timed_out = 1;
     b->dirty = 1;
     b->flag_state[GS_HIL_FLAG_CMD_TIMEOUT] = 1;
     b->flag_state[GS_HIL_FLAG_SAFE_STATE] = 1;
-    b->input.ambient_temperature = config->ambient_temperature_K;
-    b->input.measured_temperature = config->ambient_temperature_K;
+    b->commanded.ambient_temperature = config->ambient_temperature_K;
+    b->commanded.measured_temperature = config->ambient_temperature_K;
+    b->input = b->commanded;
+    gs_hil_init_tuning_(b, block);
     return GS_HIL_OK;
 }
 
@@ -189,7 +150,7 @@ unsigned gs_hil_pending(const gs_hil_bridge *b)
     for (unsigned i = 0; i < b->command_count; ++i) {
         n += b->commands[i].has_pending ? 1u : 0u;
     }
-    return n;
+    return n + b->request_count;
 }
 
 static const gs_hil_frame_spec *find_frame(const gs_hil_dbc *dbc, const gs_hil_frame *frame, unsigned *index)
@@ -201,6 +162,39 @@ static const gs_hil_frame_spec *find_frame(const gs_hil_dbc *dbc, const gs_hil_f
         }
     }
     return NULL;
+}
+
+/* The value of the signal with role in a decoded frame's data (0 without). */
+static double role_value(const gs_hil_frame_spec *spec, const uint8_t *data, gs_hil_role role)
+{
+    for (unsigned s = 0; s < spec->signal_count; ++s) {
+        if (spec->signals[s].role == role) {
+            return gs_hil_signal_value(&spec->signals[s], data);
+        }
+    }
+    return 0.0;
+}
+
+/* A parameter frame: decoded and range-checked as a command is, then queued
+ * (or refused: counted and acknowledged). */
+static gs_hil_reason handle_param(gs_hil_bridge *b, const gs_hil_frame_spec *spec, const gs_hil_frame *frame)
+{
+    gs_hil_command unused;
+    gs_hil_reason decoded = gs_hil_decode_command(spec, frame->data, frame->length, &unused);
+    if (decoded != GS_HIL_PENDING) {
+        return count_reason(b, decoded);
+    }
+    uint8_t data[GS_HIL_MAX_DATA] = {0};
+    memcpy(data, frame->data, frame->length);
+    double id = role_value(spec, data, GS_HIL_ROLE_PARAM_ID);
+    double element = role_value(spec, data, GS_HIL_ROLE_PARAM_ELEMENT);
+    double value = role_value(spec, data, GS_HIL_ROLE_PARAM_VALUE);
+    /* the index signals are unsigned integers (gs_hil_dbc_check) */
+    gs_hil_param_result r = gs_hil_request_param(b, (unsigned)id, (unsigned)element, value);
+    if (r == GS_HIL_PARAM_APPLIED) {
+        return GS_HIL_PENDING;
+    }
+    return r == GS_HIL_PARAM_BUSY ? GS_HIL_REJECTED_PARAM_BUSY : GS_HIL_REJECTED_BAD_PARAM; /* counted */
 }
 
 gs_hil_reason gs_hil_handle(gs_hil_bridge *b, const gs_hil_frame *frame)
@@ -218,10 +212,13 @@ gs_hil_reason gs_hil_handle(gs_hil_bridge *b, const gs_hil_frame *frame)
     if (spec == NULL) {
         return count_reason(b, GS_HIL_REJECTED_UNKNOWN_ID);
     }
-    if (spec->kind == GS_HIL_FRAME_FEEDBACK) {
+    if (b->kind[index] == GS_HIL_FRAME_FEEDBACK || b->kind[index] == GS_HIL_FRAME_ACK) {
         return count_reason(b, GS_HIL_IGNORED_FEEDBACK_ID);
     }
-    if (spec->kind == GS_HIL_FRAME_OTHER) {
+    if (b->kind[index] == GS_HIL_FRAME_PARAM) {
+        return handle_param(b, spec, frame);
+    }
+    if (b->kind[index] == GS_HIL_FRAME_OTHER) {
         return count_reason(b, GS_HIL_IGNORED_OTHER_DBC_FRAME);
     }
     gs_hil_reason decoded = gs_hil_decode_command(spec, frame->data, frame->length, &cmd);
@@ -312,7 +309,7 @@ static void update_state(gs_hil_bridge *b)
     b->flag_state[GS_HIL_FLAG_CMD_TIMEOUT] = stale;
     b->flag_state[GS_HIL_FLAG_SAFE_STATE] = safe;
     b->flag_state[GS_HIL_FLAG_DRIVE_DISABLED] = disabled;
-    gs_rig_input *in = &b->input;
+    gs_rig_input *in = &b->commanded;
     in->base_speed = 0;
     in->base_torque = 0;
     in->load = 0;
@@ -344,7 +341,10 @@ static double angle_modulo(double x)
     return m;
 }
 
-static double role_value(const gs_hil_bridge *b, const gs_hil_signal *sig)
+/* The model's value of a feedback signal this period: an output or an input
+ * the rig applied. The fault stage (fault.c) acts between this and the
+ * encoder. */
+double gs_hil_model_value_(const gs_hil_bridge *b, const gs_hil_signal *sig)
 {
     const gs_real *out = (const gs_real *)(const void *)&b->output;
     switch (sig->role) {
@@ -358,7 +358,8 @@ static double role_value(const gs_hil_bridge *b, const gs_hil_signal *sig)
         return (double)b->input.base_torque;
     case GS_HIL_ROLE_IN_LOAD:
         return (double)b->input.load;
-    case GS_HIL_ROLE_NONE:
+    case GS_HIL_ROLE_NONE: /* a signal without a role: the value in its range nearest 0 */
+        return 0.0;
     case GS_HIL_ROLE_CMD_BASE_SPEED:
     case GS_HIL_ROLE_CMD_BASE_TORQUE:
     case GS_HIL_ROLE_CMD_LOAD:
@@ -366,67 +367,167 @@ static double role_value(const gs_hil_bridge *b, const gs_hil_signal *sig)
     case GS_HIL_ROLE_STATUS_COUNTER:
     case GS_HIL_ROLE_STATUS_FLAG:
     case GS_HIL_ROLE_STATUS_COUNT:
+    case GS_HIL_ROLE_PARAM_ID:
+    case GS_HIL_ROLE_PARAM_ELEMENT:
+    case GS_HIL_ROLE_PARAM_VALUE:
+    case GS_HIL_ROLE_ACK_ID:
+    case GS_HIL_ROLE_ACK_ELEMENT:
+    case GS_HIL_ROLE_ACK_VALUE:
+    case GS_HIL_ROLE_ACK_RESULT:
+    case GS_HIL_ROLES:
     default:
         return nan("");
     }
 }
 
-/* A signal without a role is sent as the value in its range nearest 0. */
-static double nearest_zero_value(const gs_hil_signal *sig)
+/* The value a command signal has in the command applied this period (NaN
+ * before any). */
+static double command_value(const gs_hil_bridge *b, unsigned frame, unsigned signal)
 {
-    double x = sig->minimum > 0.0 ? sig->minimum : 0.0;
-    return x < sig->maximum ? x : sig->maximum;
+    const gs_hil_signal *sig = &b->config.dbc->frames[frame].signals[signal];
+    int slot = gs_hil_role_command_index(sig->role);
+    const gs_hil_command_slot *c = &b->commands[b->command_index[frame]];
+    if (slot < 0 || !c->has_held || !c->held.present[slot]) {
+        return nan("");
+    }
+    return c->held.value[slot];
+}
+
+double gs_hil_source_value_(const gs_hil_bridge *b, const gs_hil_condition *c)
+{
+    switch (c->source) {
+    case GS_HIL_SOURCE_FEEDBACK:
+        return gs_hil_model_value_(b, &b->config.dbc->frames[c->frame].signals[c->signal]);
+    case GS_HIL_SOURCE_COMMAND:
+        return command_value(b, c->frame, c->signal);
+    case GS_HIL_SOURCE_FLAG:
+    default:
+        return b->flag_state[c->flag] ? 1.0 : 0.0;
+    }
+}
+
+int gs_hil_condition_holds_(const gs_hil_bridge *b, const gs_hil_condition *c)
+{
+    double x = gs_hil_source_value_(b, c), v = c->value;
+    switch (c->op) {
+    case GS_HIL_OP_LT: return x < v;
+    case GS_HIL_OP_LE: return x <= v;
+    case GS_HIL_OP_GT: return x > v;
+    case GS_HIL_OP_GE: return x >= v;
+    case GS_HIL_OP_EQ: return x <= v && x >= v;
+    case GS_HIL_OP_NE: return x < v || x > v;
+    case GS_HIL_OPS:
+    default: return 0;
+    }
 }
 
 /* Flags latched since the previous frame of this ID (updated once per frame). */
-static void latch_flags(gs_hil_bridge *b, unsigned frame_index, int latched[5])
+static void latch_flags(gs_hil_bridge *b, unsigned frame_index, int latched[GS_HIL_LATCHED_FLAGS])
 {
-    for (unsigned k = 0; k < 5u; ++k) {
+    for (unsigned k = 0; k < GS_HIL_LATCHED_FLAGS; ++k) {
         uint64_t now = b->counters.count[latched_counts[k]];
         latched[k] = now > b->latched_at[frame_index][k];
         b->latched_at[frame_index][k] = now;
     }
 }
 
-static void encode_signal(gs_hil_bridge *b, unsigned frame_index, const gs_hil_signal *sig, uint8_t *data,
-                          int latched[5], int *have_latched)
+/* The raw value of a status signal (counter, flag, count). */
+static uint64_t status_raw(gs_hil_bridge *b, unsigned frame_index, const gs_hil_signal *sig,
+                           int latched[GS_HIL_LATCHED_FLAGS], int *have_latched)
 {
-    switch (sig->role) {
-    case GS_HIL_ROLE_STATUS_COUNTER:
-        gs_hil_put_raw(sig, b->status_seq[frame_index]++, data);
-        return;
-    case GS_HIL_ROLE_STATUS_COUNT:
-        gs_hil_put_raw(sig, b->counters.count[sig->aux], data);
-        return;
-    case GS_HIL_ROLE_STATUS_FLAG:
-        if (sig->aux <= GS_HIL_FLAG_DRIVE_DISABLED) {
-            gs_hil_put_raw(sig, (uint64_t)(b->flag_state[sig->aux] != 0), data);
-            return;
+    if (sig->role == GS_HIL_ROLE_STATUS_COUNTER) {
+        uint64_t held;
+        if (b->fault_count > 0u && gs_hil_fault_counter_(b, frame_index, b->status_seq[frame_index], &held)) {
+            return held; /* counter_stop: the counter does not move */
         }
-        if (!*have_latched) {
-            latch_flags(b, frame_index, latched);
-            *have_latched = 1;
-        }
-        gs_hil_put_raw(sig, (uint64_t)(latched[sig->aux - GS_HIL_FLAG_CMD_REJECTED] != 0), data);
-        return;
-    case GS_HIL_ROLE_NONE:
-        (void)gs_hil_put_value(sig, nearest_zero_value(sig), data);
-        return;
-    case GS_HIL_ROLE_CMD_BASE_SPEED:
-    case GS_HIL_ROLE_CMD_BASE_TORQUE:
-    case GS_HIL_ROLE_CMD_LOAD:
-    case GS_HIL_ROLE_CMD_MODE:
-    case GS_HIL_ROLE_OUT:
-    case GS_HIL_ROLE_OUT_FOLLOWER_ANGLE:
-    case GS_HIL_ROLE_IN_BASE_SPEED:
-    case GS_HIL_ROLE_IN_BASE_TORQUE:
-    case GS_HIL_ROLE_IN_LOAD:
-    default:
-        if (gs_hil_put_value(sig, role_value(b, sig), data)) {
-            b->counters.count[GS_HIL_COUNT_SATURATIONS] += 1u;
-        }
-        return;
+        return b->status_seq[frame_index]++;
     }
+    if (sig->role == GS_HIL_ROLE_STATUS_COUNT) {
+        return b->counters.count[sig->aux];
+    }
+    if (sig->aux < GS_HIL_STATE_FLAGS) {
+        return (uint64_t)(b->flag_state[sig->aux] != 0);
+    }
+    if (!*have_latched) {
+        latch_flags(b, frame_index, latched);
+        *have_latched = 1;
+    }
+    return (uint64_t)(latched[sig->aux - GS_HIL_STATE_FLAGS] != 0);
+}
+
+static int is_status_signal(const gs_hil_signal *sig)
+{
+    return sig->role == GS_HIL_ROLE_STATUS_COUNTER || sig->role == GS_HIL_ROLE_STATUS_FLAG ||
+           sig->role == GS_HIL_ROLE_STATUS_COUNT;
+}
+
+/* Encode one feedback frame into *frame; clamped values count as saturations. */
+static void encode_frame(gs_hil_bridge *b, unsigned frame_index, gs_hil_frame *frame)
+{
+    const gs_hil_frame_spec *spec = &b->config.dbc->frames[frame_index];
+    int latched[GS_HIL_LATCHED_FLAGS] = {0};
+    int have_latched = 0;
+    for (unsigned s = 0; s < spec->signal_count; ++s) {
+        const gs_hil_signal *sig = &spec->signals[s];
+        if (is_status_signal(sig)) {
+            gs_hil_put_raw(sig, status_raw(b, frame_index, sig, latched, &have_latched), frame->data);
+            continue;
+        }
+        double x = gs_hil_model_value_(b, sig);
+        if (b->fault_count > 0u) {
+            x = gs_hil_fault_value_(b, frame_index, s, x);
+        }
+        if (gs_hil_put_value(sig, x, frame->data) && sig->role != GS_HIL_ROLE_NONE) {
+            b->counters.count[GS_HIL_COUNT_SATURATIONS] += 1u;
+            frame->saturated |= (uint64_t)1 << s;
+        }
+    }
+}
+
+static void send(gs_hil_bridge *b, const gs_hil_frame *frame)
+{
+    if (b->config.send != NULL && b->config.send(b->config.send_context, frame) != 0) {
+        b->counters.count[GS_HIL_COUNT_TX_ERRORS] += 1u;
+    } else {
+        b->counters.count[GS_HIL_COUNT_TX_FRAMES] += 1u;
+    }
+}
+
+static void start_frame(const gs_hil_bridge *b, const gs_hil_frame_spec *spec, gs_hil_frame *frame)
+{
+    memset(frame, 0, sizeof *frame);
+    frame->timestamp_s = b->config.stamp_origin_s + (double)b->counters.count[GS_HIL_COUNT_PERIODS] * b->period_s;
+    frame->id = spec->id;
+    frame->is_extended = spec->is_extended;
+    frame->length = spec->length;
+}
+
+/* The acknowledgements of the parameter requests settled this period. */
+static void emit_acks(gs_hil_bridge *b)
+{
+    const gs_hil_dbc *dbc = b->config.dbc;
+    for (unsigned i = 0; i < dbc->frame_count && b->ack_count > 0u; ++i) {
+        if (b->kind[i] != GS_HIL_FRAME_ACK) {
+            continue;
+        }
+        const gs_hil_frame_spec *spec = &dbc->frames[i];
+        for (unsigned k = 0; k < b->ack_count; ++k) {
+            const gs_hil_param_request *r = &b->acks[k];
+            gs_hil_frame frame;
+            start_frame(b, spec, &frame);
+            for (unsigned s = 0; s < spec->signal_count; ++s) {
+                const gs_hil_signal *sig = &spec->signals[s];
+                double x = sig->role == GS_HIL_ROLE_ACK_ID        ? (double)r->index
+                           : sig->role == GS_HIL_ROLE_ACK_ELEMENT ? (double)r->element
+                           : sig->role == GS_HIL_ROLE_ACK_VALUE   ? r->value
+                           : sig->role == GS_HIL_ROLE_ACK_RESULT  ? (double)r->result
+                                                                  : 0.0;
+                (void)gs_hil_put_value(sig, x, frame.data); /* clamped, never wrapped; not a feedback saturation */
+            }
+            send(b, &frame);
+        }
+    }
+    b->ack_count = 0;
 }
 
 static void emit(gs_hil_bridge *b)
@@ -438,23 +539,14 @@ static void emit(gs_hil_bridge *b)
         if (n % b->cycle_periods[i] != 0u) {
             continue;
         }
-        const gs_hil_frame_spec *spec = &b->config.dbc->frames[i];
-        int latched[5] = {0};
-        int have_latched = 0;
-        memset(&frame, 0, sizeof frame);
-        frame.timestamp_s = b->config.stamp_origin_s + (double)n * b->period_s;
-        frame.id = spec->id;
-        frame.is_extended = spec->is_extended;
-        frame.length = spec->length;
-        for (unsigned s = 0; s < spec->signal_count; ++s) {
-            encode_signal(b, i, &spec->signals[s], frame.data, latched, &have_latched);
-        }
-        if (b->config.send != NULL && b->config.send(b->config.send_context, &frame) != 0) {
-            b->counters.count[GS_HIL_COUNT_TX_ERRORS] += 1u;
-        } else {
-            b->counters.count[GS_HIL_COUNT_TX_FRAMES] += 1u;
+        start_frame(b, &b->config.dbc->frames[i], &frame);
+        encode_frame(b, i, &frame);
+        unsigned copies = b->fault_count > 0u ? gs_hil_fault_frame_(b, i, &frame) : 1u;
+        for (unsigned c = 0; c < copies; ++c) {
+            send(b, &frame);
         }
     }
+    emit_acks(b);
 }
 
 void gs_hil_advance(gs_hil_bridge *b, uint64_t periods)
@@ -465,16 +557,54 @@ void gs_hil_advance(gs_hil_bridge *b, uint64_t periods)
     for (uint64_t p = 0; p < periods; ++p) {
         apply_pending(b);
         uint64_t now = b->counters.count[GS_HIL_COUNT_PERIODS];
+        gs_hil_swap_params_(b); /* the parameter requests due now take effect */
+        if (b->scenario != NULL) {
+            gs_hil_scenario_start_(b, now);
+        }
         if (b->dirty || (!b->timed_out && now >= b->stale_at)) {
             update_state(b);
+        }
+        b->input = b->commanded;
+        if (b->has_load) { /* the scenario's load adds to the commanded one */
+            b->input.load = (gs_real)((double)b->commanded.load + gs_hil_scenario_load_(b, now));
         }
         for (unsigned s = 0; s < b->config.substeps; ++s) {
             gs_rig_step(b->consts, b->state, &b->input, &b->output);
         }
         b->counters.steps += b->config.substeps;
         b->counters.count[GS_HIL_COUNT_PERIODS] = now + 1u;
+        if (b->fault_count > 0u) {
+            gs_hil_faults_update_(b, now);
+        }
+        if (b->scenario != NULL) {
+            gs_hil_scenario_end_(b, now);
+        }
         emit(b);
+        if (!b->config.deferred_prepare) {
+            gs_hil_prepare(b);
+        }
     }
+}
+
+uint64_t gs_hil_period_at(const gs_hil_bridge *b, double t_s)
+{
+    double k = ceil((t_s - GS_HIL_REPLAY_SLACK_S) / b->period_s);
+    return k > 0.0 ? (uint64_t)k : 0u;
+}
+
+void gs_hil_advance_to(gs_hil_bridge *b, double t_s)
+{
+    uint64_t k = gs_hil_period_at(b, t_s);
+    uint64_t now = b->counters.count[GS_HIL_COUNT_PERIODS];
+    if (k > now) {
+        gs_hil_advance(b, k - now);
+    }
+}
+
+uint64_t gs_hil_periods_in(const gs_hil_bridge *b, double s)
+{
+    double n = nearbyint(s / b->period_s); /* half to even, as Python's round() */
+    return n > 0.0 ? (uint64_t)n : 0u;
 }
 
 void gs_hil_close(gs_hil_bridge *b)
@@ -488,5 +618,9 @@ void gs_hil_close(gs_hil_bridge *b)
             count_reason(b, GS_HIL_LATE_AFTER_STOP);
         }
     }
+    for (unsigned i = 0; i < b->request_count; ++i) {
+        count_reason(b, GS_HIL_LATE_AFTER_STOP);
+    }
+    b->request_count = 0;
     b->closed = 1;
 }

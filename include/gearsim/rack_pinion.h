@@ -17,35 +17,24 @@ extern "C" {
 
 #define gs_rack_pinion_init GS_PRECISION_NAME(gs_rack_pinion_init)
 
-typedef enum {
-    GS_PARAMETERIZE_PINION_RADIUS = 0,   /* default */
-    GS_PARAMETERIZE_TOOTH_PARAMETERS = 1 /* r_P = N_P*x_R/(2*pi) */
-} gs_rack_parameterization;
+/* How the pinion radius is given (GS_OPTIONS_Parameterization): the radius
+ * (default) or r_P = N_P*x_R/(2*pi); the rack's direction
+ * (GS_OPTIONS_RackDirectionality): POSITIVE s_R = +1 (default), NEGATIVE
+ * s_R = -1. */
+typedef enum { GS_OPTIONS_Parameterization(GS_OPTION_ENUMERATOR_) } gs_rack_parameterization;
+typedef enum { GS_OPTIONS_RackDirectionality(GS_OPTION_ENUMERATOR_) } gs_rack_direction;
 
-typedef enum {
-    GS_RACK_POSITIVE = 0,  /* s_R = +1: positive pinion rotation moves the rack + (default) */
-    GS_RACK_NEGATIVE = 1   /* s_R = -1 */
-} gs_rack_direction;
-
+/* What the user sets: the members of gearsim/parameters.h
+ * GS_RACK_PINION_PARAM_LIST, plain data in SI units; defaults from
+ * gs_rack_pinion_params_default(). The backlash gap is measured along the
+ * rack (base_radius_m unused). */
 typedef struct {
-    gs_rack_parameterization parameterization;  /* default pinion radius */
-    gs_real pinion_radius_m;                    /* (> 0), default 0.1 */
-    gs_real teeth_count;                        /* N_P (> 0), default 20 */
-    gs_real spacing_m;                          /* x_R (> 0), default 0.005 */
-    gs_rack_direction rack_directionality;      /* default positive */
-    gs_friction_model friction_model;           /* NONE (default), CONSTANT, TEMPERATURE */
-    gs_loss_smoothing loss_smoothing;           /* default passive */
-    gs_real efficiency_const;                   /* (0, 1], default 0.8 */
-    int temperature_count;
-    gs_real temperature_vector_K[GS_TABLE_MAX]; /* default [280 300 320] */
-    gs_real efficiency_vector[GS_TABLE_MAX];    /* default [0.95 0.90 0.85] */
-    gs_real power_threshold_W;                  /* rack power threshold (> 0), default 1e-3 */
-    gs_real pinion_viscous_coefficient;         /* N*m/(rad/s) (>= 0), default 0 */
-    gs_real rack_viscous_coefficient;           /* N/(m/s) (>= 0), default 0 */
-    gs_real thermal_mass_J_K;                   /* (> 0), default 50 */
-    gs_real initial_temperature_K;              /* (> 0), default 300 */
-    gs_backlash_params backlash;                /* gap along the rack; base_radius_m unused */
+    GS_RACK_PINION_PARAM_LIST(GS_PARAM_MEMBER_)
 } gs_rack_pinion_params;
+
+/* Every entry of gs_rack_pinion_params, in member order. */
+#define GS_RACK_PINION_PARAM_FIELDS (0 GS_RACK_PINION_PARAM_LIST(GS_PARAM_COUNT_))
+GS_API extern const gs_param_info gs_rack_pinion_param_info[GS_RACK_PINION_PARAM_FIELDS];
 
 /* What init derives from the parameters (opaque, see GS_BLOCK_CONSTS_REALS);
  * the step only reads it. The state is a gs_block_state. */

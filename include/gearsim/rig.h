@@ -15,12 +15,15 @@
  * integrated implicitly (backward Euler on the contact, a fixed number of
  * sub-steps), so stiff contact stays bounded at any dt.
  *
- * Wherever the driven side moves freely (torque-driven base, or backlash),
- * load_coulomb_friction is a true Coulomb friction integrated implicitly: it
- * holds the driven side at rest while the applied torque stays within it and
- * never reverses the motion; the meshing loss can likewise stop the follower
- * but not reverse it. In the speed-driven rigid rig the speed is imposed and
- * the Coulomb friction is tanh-smoothed on load_coulomb_speed_threshold.
+ * Wherever a shaft moves freely (torque-driven base, backlash, compliant
+ * shaft), load_coulomb_friction is a true Coulomb friction integrated
+ * implicitly: it holds the driven side at rest while the applied torque stays
+ * within it and never reverses the motion. The meshing loss is a friction of
+ * the same kind there: the law at full strength while the gear turns, and at
+ * rest it holds while neither side can drive the other (physics.md 11). In
+ * the speed-driven rigid rig the speed is imposed, the meshing loss is the
+ * smoothed law and the Coulomb friction is tanh-smoothed on
+ * load_coulomb_speed_threshold.
  *
  * Three rig terms go beyond the seed blocks (physics.md 11), each off by
  * default: a Stribeck hump on the driven side's friction (it then holds at
@@ -30,8 +33,10 @@
  * base_speed/base_angle the base gear's; with base_inertia 0 the spring acts
  * at the mesh), and a torque ripple on the base side, periodic in the base
  * angle per revolution and per tooth. Two switches, also off by default:
- * a regularised (creeping) friction on a freely moving driven side, and the
- * step-mean speed of the speed-driven rigid rig.
+ * load_friction_regularised makes a freely moving driven side's friction the
+ * smooth law of the speed-driven rigid rig (it creeps, no stiction), and
+ * base_speed_ramp evaluates the speed-driven rigid rig at the step's mean
+ * speed.
  */
 #ifndef GEARSIM_RIG_H
 #define GEARSIM_RIG_H
@@ -52,68 +57,27 @@ extern "C" {
 /* Harmonics of the torque ripple, per revolution and per tooth mesh. */
 #define GS_RIPPLE_HARMONICS 2
 
-typedef enum {
-    GS_BASE_SPEED_DRIVEN = 0,
-    GS_BASE_TORQUE_DRIVEN = 1
-} gs_base_drive;
-
-typedef enum {
-    GS_TEMPERATURE_FROM_MODEL = 0,  /* thermal state (5.1) */
-    GS_TEMPERATURE_FROM_INPUT = 1   /* measured_temperature_K overrides the state */
-} gs_temperature_source;
+/* How the base shaft is driven (GS_OPTIONS_BaseDrive; default speed) and
+ * which temperature the losses use (GS_OPTIONS_TemperatureSource: the thermal
+ * state (5.1), the default, or the measured_temperature input). */
+typedef enum { GS_OPTIONS_BaseDrive(GS_OPTION_ENUMERATOR_) } gs_base_drive;
+typedef enum { GS_OPTIONS_TemperatureSource(GS_OPTION_ENUMERATOR_) } gs_temperature_source;
 
 typedef enum {
     GS_RIG_SIMPLE_GEAR = 0,
     GS_RIG_RACK_PINION = 1
 } gs_rig_block;
 
+/* What the user sets for the rig: the members of gearsim/parameters.h
+ * GS_RIG_PARAM_LIST (name and unit in each rig, valid ranges); defaults from
+ * gs_rig_params_default(), with every term of physics.md 11 off. */
 typedef struct {
-    gs_real dt_s;                          /* fixed step (> 0), default 1e-3 */
-    gs_base_drive base_drive;              /* default speed-driven */
-    gs_real base_inertia_kg_m2;            /* torque-driven: > 0; speed-driven: >= 0 and adds J_B*alpha_B to base_torque; default 0 */
-    gs_real initial_base_speed_rad_s;      /* torque-driven start speed, default 0 */
-    gs_real driven_inertia;                /* follower_inertia kg*m^2 or rack_mass kg (> 0), default 0.05 */
-    gs_real load_coulomb_friction;         /* N*m or N (>= 0), default 0 */
-    gs_real load_coulomb_speed_threshold;  /* rad/s or m/s (> 0), tanh(4 w/w_th) smoothing of the
-                                              speed-driven rigid rig, default 1e-3 */
-    gs_real load_offset;                   /* N*m or N, constant bias on the driven side, default 0 */
-    int heat_path;                         /* 1: Q_H = (T_amb - T)/R_th; 0: adiabatic (default 0) */
-    gs_real thermal_resistance_K_W;        /* R_th (> 0 when heat_path), default 2 */
-    gs_temperature_source temperature_source; /* default from model */
-    gs_real accel_filter_time_constant_s;  /* speed-driven: first-order low-pass on the
-                                              backward-difference base acceleration (>= 0; 0 = raw), default 0 */
-    int contact_substeps;                  /* backlash: sub-steps per step, 1..GS_MAX_SUBSTEPS, 0 = choose at init */
-    /* Stribeck friction (physics.md 11): the driven side's friction level
-     * F(v) = F_C + (F_brk - F_C)*exp(-(v/v_S)^2); it holds at rest up to F_brk. */
-    gs_real load_breakaway_friction;       /* F_brk, N*m or N: 0 (default) = none, else >= load_coulomb_friction */
-    gs_real load_stribeck_speed;           /* v_S, rad/s or m/s (> 0 with a breakaway friction), default 0.01 */
-    /* Compliance: a torsional spring and damper between the drive and the
-     * base gear, which then turns on its own with base_inertia (>= 0; 0: the
-     * spring acts at the mesh, the driven side behind it turning alone).
-     * Speed-driven base and rigid mesh only. */
-    gs_real compliance_stiffness_Nm_rad;   /* k (>= 0), 0 (default) = rigid shaft */
-    gs_real compliance_damping_Nm_s_rad;   /* c (>= 0), default 0 */
-    /* Torque ripple on the base side, the torque the base shaft must add:
-     * sum_i A_i*cos(i*theta_B + phi_i) + sum_j M_j*cos(j*Z*theta_B + psi_j), i, j = 1..GS_RIPPLE_HARMONICS */
-    gs_real ripple_revolution_amplitude_Nm[GS_RIPPLE_HARMONICS]; /* A_i (>= 0), default 0 */
-    gs_real ripple_revolution_phase_rad[GS_RIPPLE_HARMONICS];    /* phi_i (finite), default 0 */
-    gs_real ripple_mesh_amplitude_Nm[GS_RIPPLE_HARMONICS];       /* M_j (>= 0), default 0 */
-    gs_real ripple_mesh_phase_rad[GS_RIPPLE_HARMONICS];          /* psi_j (finite), default 0 */
-    int ripple_mesh_teeth;                 /* Z: teeth of the base gear or pinion (>= 1 when a M_j > 0), default 0 */
-    /* Regularised driven-side friction (physics.md 11): nonzero makes the
-     * friction of a freely moving driven side (torque-driven rigid rig,
-     * backlash and compliant sub-steps) the smooth law of the speed-driven
-     * rigid rig, F(v)*tanh(4 v/load_coulomb_speed_threshold): no stiction, a
-     * damper F/(v_th/4) near rest, so the driven side creeps under any load.
-     * 0 (default): the set-valued Coulomb law. */
-    int load_friction_regularised;
-    /* Speed-driven rigid mesh: nonzero evaluates the speed-dependent torques
-     * at the step's mean speed (the last and this sample averaged: the linear
-     * ramp the backlash and compliant rigs always follow), so that every
-     * output torque is a mean over the step like theirs. 0 (default): at
-     * this sample. */
-    int base_speed_ramp;
+    GS_RIG_PARAM_LIST(GS_RIG_PARAM_MEMBER_)
 } gs_rig_params;
+
+/* Every entry of gs_rig_params, in member order: key and unit in each rig. */
+#define GS_RIG_PARAM_FIELDS (0 GS_RIG_PARAM_LIST(GS_RIG_PARAM_COUNT_))
+GS_API extern const gs_param_info gs_rig_param_info[GS_RIG_PARAM_FIELDS];
 
 /* Per-step inputs and outputs (gearsim/fields.h: names, units, docs). All
  * members are gs_real, so an array of N inputs is an N x GS_RIG_INPUT_FIELDS
@@ -153,11 +117,14 @@ GS_API extern const gs_field_info gs_rig_state_info[GS_RIG_STATE_FIELDS];
  * step only reads it: init once, then it may be const, shared by several
  * states, or kept in flash as an image of an initialised rig. Its size is
  * part of the ABI (GS_RIG_CONSTS_REALS reals; on targets that pack enums the
- * internal layout uses a few bytes less). */
+ * internal layout uses a few bytes less). The count is exactly what the
+ * internal layout needs on the hosts: the library does not compile with a
+ * stale count, and the compiler's message gives the value to write here
+ * (src/mesh.h, GS_CONSTS_REALS_CHECK_). */
 #ifdef GS_SINGLE_PRECISION
-#define GS_RIG_CONSTS_REALS 213
+#define GS_RIG_CONSTS_REALS 251
 #else
-#define GS_RIG_CONSTS_REALS 204
+#define GS_RIG_CONSTS_REALS 242
 #endif
 typedef struct {
     gs_real opaque_[GS_RIG_CONSTS_REALS];

@@ -18,37 +18,23 @@ extern "C" {
 
 #define gs_simple_gear_init GS_PRECISION_NAME(gs_simple_gear_init)
 
-typedef enum {
-    GS_ROTATES_SAME = 0,     /* s = +1 */
-    GS_ROTATES_OPPOSITE = 1  /* s = -1 (default) */
-} gs_output_rotation;
+/* Output shaft direction (gearsim/parameters.h GS_OPTIONS_OutputShaftRotates):
+ * SAME s = +1, OPPOSITE s = -1 (the default). */
+typedef enum { GS_OPTIONS_OutputShaftRotates(GS_OPTION_ENUMERATOR_) } gs_output_rotation;
 
-/* What the user sets. Plain data in SI units; defaults from
- * gs_simple_gear_params_default() (docs/physics.md section 9). Parameters of
- * an inactive option (e.g. the tables with constant efficiency) are not
- * validated. */
+/* What the user sets: the members of gearsim/parameters.h
+ * GS_SIMPLE_GEAR_PARAM_LIST (names, units, valid ranges), plain data in SI
+ * units; defaults from gs_simple_gear_params_default() (docs/physics.md
+ * section 9, docs/fmu.md lists them). Parameters of an inactive option (e.g.
+ * the tables with constant efficiency) are not validated. */
 typedef struct {
-    gs_real teeth_ratio;                      /* g = N_F/N_B (> 0), default 2 */
-    gs_output_rotation output_shaft_rotates;  /* default GS_ROTATES_OPPOSITE */
-    gs_friction_model friction_model;         /* default GS_FRICTION_NONE */
-    gs_loss_smoothing loss_smoothing;         /* default GS_SMOOTHING_PASSIVE */
-    gs_real efficiency_const;                 /* (0, 1], default 0.98 */
-    gs_real power_threshold_W;                /* p_th (> 0), default 1e-3 */
-    gs_real idle_torque_Nm;                   /* tau_idle on the base shaft (>= 0), default 0.01 */
-    gs_real nominal_output_torque_Nm;         /* tau_nom (> 0), default 1 */
-    gs_real efficiency_nominal;               /* (0, 1), default 0.95 */
-    gs_real speed_threshold_rad_s;            /* omega_th (> 0), default 0.01 */
-    int temperature_count;                    /* entries used in temperature_vector_K */
-    gs_real temperature_vector_K[GS_TABLE_MAX];/* strictly increasing, default [280 300 320] */
-    gs_real efficiency_vector[GS_TABLE_MAX];  /* per temperature, (0, 1], default [0.95 0.90 0.85] */
-    int load_count;                           /* entries used in load_vector_Nm */
-    gs_real load_vector_Nm[GS_TABLE_MAX];     /* base-gear load, >= 0, strictly increasing, default [0 50 100] */
-    gs_real efficiency_matrix[GS_TABLE_MAX][GS_TABLE_MAX]; /* [temperature][load], (0, 1] */
-    gs_backlash_params backlash;              /* default disabled */
-    gs_real viscous_coefficients[2];          /* [mu_B, mu_F] N*m/(rad/s) (>= 0), default [0 0] */
-    gs_real thermal_mass_J_K;                 /* (> 0), default 50 */
-    gs_real initial_temperature_K;            /* (> 0), default 300 */
+    GS_SIMPLE_GEAR_PARAM_LIST(GS_PARAM_MEMBER_)
 } gs_simple_gear_params;
+
+/* Every entry of gs_simple_gear_params, in member order (the backlash member
+ * is one GROUP entry pointing at gs_backlash_param_info). */
+#define GS_SIMPLE_GEAR_PARAM_FIELDS (0 GS_SIMPLE_GEAR_PARAM_LIST(GS_PARAM_COUNT_))
+GS_API extern const gs_param_info gs_simple_gear_param_info[GS_SIMPLE_GEAR_PARAM_FIELDS];
 
 /* What init derives from the parameters (opaque, see GS_BLOCK_CONSTS_REALS);
  * the step only reads it. The state is a gs_block_state. */

@@ -11,6 +11,7 @@
 #include <stddef.h>
 
 #include "gearsim/fields.h"
+#include "gearsim/parameters.h"
 #include "gearsim/version.h"
 
 #ifdef __cplusplus
@@ -91,47 +92,21 @@ typedef struct {
     const char *message;
 } gs_error;
 
-/* Meshing-loss (friction) models. Rack & Pinion accepts NONE, CONSTANT and
- * TEMPERATURE only. */
-typedef enum {
-    GS_FRICTION_NONE = 0,
-    GS_FRICTION_CONSTANT_EFFICIENCY = 1,
-    GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY = 2,
-    GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY = 3,
-    GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY = 4
-} gs_friction_model;
+/* The option enums shared by both blocks, from the option lists of
+ * gearsim/parameters.h (names, meaning). Meshing-loss models: the Rack &
+ * Pinion accepts NONE, CONSTANT and TEMPERATURE only. Power-threshold
+ * smoothing (docs/physics.md 2.1/2.2): PASSIVE (default) never produces
+ * negative loss power; SIMSCAPE reproduces eq. 2.1. Hard-stop contact laws:
+ * docs/physics.md eqs 4.3-4.5. */
+typedef enum { GS_OPTIONS_FrictionModel(GS_OPTION_ENUMERATOR_) } gs_friction_model;
+typedef enum { GS_OPTIONS_LossSmoothing(GS_OPTION_ENUMERATOR_) } gs_loss_smoothing;
+typedef enum { GS_OPTIONS_HardStopModel(GS_OPTION_ENUMERATOR_) } gs_hard_stop_model;
 
-/* Power-threshold smoothing of the efficiency laws (docs/physics.md 2.1/2.2).
- * PASSIVE (default) never produces negative loss power; SIMSCAPE reproduces
- * eq. 2.1, which is slightly active for 0 < p << p_th. */
-typedef enum {
-    GS_SMOOTHING_PASSIVE = 0,
-    GS_SMOOTHING_SIMSCAPE = 1
-} gs_loss_smoothing;
-
-/* Hard-stop contact laws of the backlash (docs/physics.md eqs 4.3-4.5). */
-typedef enum {
-    GS_HARD_STOP_SMOOTH = 0,        /* stiffness and damping through the transition region, damped rebound */
-    GS_HARD_STOP_FULL_UNDAMPED = 1, /* full stiffness and damping at bounds, undamped rebound */
-    GS_HARD_STOP_FULL_DAMPED = 2    /* full stiffness and damping at bounds, damped rebound */
-} gs_hard_stop_model;
-
-/* Backlash parameters, shared by both blocks. For the Rack & Pinion the gap is
- * measured along the rack and base_radius_m is ignored (the pinion radius is
- * used). */
+/* Backlash parameters, shared by both blocks (gearsim/parameters.h
+ * GS_BACKLASH_PARAM_LIST). For the Rack & Pinion the gap is measured along
+ * the rack and base_radius_m is ignored (the pinion radius is used). */
 typedef struct {
-    int enabled;                          /* 0 = rigid mesh, 1 = backlash */
-    gs_hard_stop_model hard_stop_model;   /* default GS_HARD_STOP_SMOOTH */
-    gs_real linear_backlash_m;            /* b, total free travel at the pitch line (> 0), default 1e-3 */
-    gs_real base_radius_m;                /* r_B (> 0), default 0.1 (Simple Gear only) */
-    gs_real transition_region_m;          /* d (> 0, smooth model), default 1e-4 */
-    gs_real stiffness_N_m;                /* K (> 0), default 1e6 */
-    gs_real damping_N_s_m;                /* D (>= 0), default 1e3 */
-    gs_real initial_position_m;           /* x0 in [-b/2, b/2], default 0 (centred) */
-    int no_pull;                          /* 1 (default): contact force never pulls the teeth together */
-    int lock_enabled;                     /* 1: static contact lock (physics.md 4, PROP), default 0 */
-    gs_real contact_speed_threshold_m_s;  /* v_th (> 0, lock mode), default 1e-3 */
-    gs_real contact_release_force_N;      /* f_th (>= 0, lock mode), default 0 */
+    GS_BACKLASH_PARAM_LIST(GS_PARAM_MEMBER_)
 } gs_backlash_params;
 
 /* The state of a block's mesh (gearsim/fields.h GS_BLOCK_STATE_LIST): plain
@@ -152,11 +127,77 @@ typedef struct {
     int is_integer;        /* 1: an int member, 0: a gs_real member */
 } gs_field_info;
 
+/* What a parameter is (gearsim/parameters.h): how its member is stored and
+ * how the layers above present it. */
+typedef enum {
+    GS_PARAM_REAL = 0,   /* one gs_real */
+    GS_PARAM_INT = 1,    /* one int */
+    GS_PARAM_BOOL = 2,   /* 0/1: an int, or a two-valued enum with options */
+    GS_PARAM_OPTION = 3, /* an enum, one of its options */
+    GS_PARAM_ARRAY = 4,  /* length gs_real, all used */
+    GS_PARAM_TABLE = 5,  /* GS_TABLE_MAX gs_real, the used length in the member count */
+    GS_PARAM_MATRIX = 6, /* GS_TABLE_MAX x GS_TABLE_MAX gs_real: rows count, columns count2 */
+    GS_PARAM_COUNT = 7,  /* an int: the used length of the tables that name it */
+    GS_PARAM_GROUP = 8   /* a nested params struct, described by members */
+} gs_param_kind;
+
+/* When a parameter may change, and where it is used (distinct bits). */
+typedef enum {
+    GS_PARAM_FIXED = 0,    /* set before init; fixed while the rig runs */
+    GS_PARAM_TUNABLE = 1,  /* may change between the steps of a running rig (re-tuning) */
+    GS_PARAM_GEAR_ONLY = 2 /* fixed, and used by the Simple Gear only */
+} gs_param_flag;
+
+/* One option of an option parameter. */
+typedef struct {
+    const char *enumerator; /* the C enumerator, e.g. "GS_FRICTION_NONE" */
+    const char *name;       /* the option string, e.g. "none" */
+    const char *doc;        /* one-line description */
+    int value;              /* the enumerator's value */
+} gs_param_option;
+
+/* An option list. */
+typedef struct {
+    const char *name;             /* e.g. "FrictionModel"; "" for a parameter without options */
+    const gs_param_option *items; /* count entries in enum order, NULL when count is 0 */
+    size_t count;
+} gs_param_options;
+
+/* One entry of the run-time parameter tables (gs_rig_param_info, ...): what
+ * gearsim/parameters.h declares, with the member's offset and size for
+ * generic access. */
+typedef struct gs_param_info_ {
+    const char *key;                      /* program name: Python keyword, model-file key, FMU
+                                             variable, gs_error.parameter (in the gear rig) */
+    const char *rack_key;                 /* the name in the Rack & Pinion rig */
+    const char *member;                   /* the C member */
+    const char *gear_unit;                /* SI unit in pint syntax ("" = dimensionless or not a number) */
+    const char *rack_unit;                /* the unit in the Rack & Pinion rig */
+    const char *doc;                      /* one line: meaning and valid range */
+    gs_param_kind kind;
+    gs_param_flag flags;                  /* FIXED, TUNABLE or GEAR_ONLY */
+    size_t offset;                        /* byte offset of the member in its struct */
+    size_t size;                          /* sizeof the member (the whole array) */
+    size_t length;                        /* values along the first index: 1 for a scalar */
+    size_t columns;                       /* values along the second index: 1 unless a matrix */
+    const char *count;                    /* TABLE: the COUNT member with its used length; MATRIX:
+                                             the rows' count; else "" */
+    const char *count2;                   /* MATRIX: the columns' count; else "" */
+    const struct gs_param_info_ *members; /* GROUP: the nested struct's table, else NULL */
+    size_t member_count;
+    const gs_param_options *options;      /* the option list (count 0 without options) */
+} gs_param_info;
+
+/* Every entry of gs_backlash_params, in member order (GS_BACKLASH_PARAM_FIELDS). */
+#define GS_BACKLASH_PARAM_FIELDS (0 GS_BACKLASH_PARAM_LIST(GS_PARAM_COUNT_))
+GS_API extern const gs_param_info gs_backlash_param_info[GS_BACKLASH_PARAM_FIELDS];
+
 /* Storage of the constants a block's init derives (opaque: the layout is
  * internal and may change between versions; the size is part of the ABI).
  * Plain data without pointers: init once, then read-only, so it may be
  * const-qualified, copied, or placed in flash as an image of an initialised
- * block (same precision and target ABI). */
+ * block (same precision and target ABI). Like GS_RIG_CONSTS_REALS, the count
+ * is checked to be exact when the library is compiled. */
 #ifdef GS_SINGLE_PRECISION
 #define GS_BLOCK_CONSTS_REALS 150
 #else

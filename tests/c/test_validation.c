@@ -116,6 +116,8 @@ GM(g_2d_lneg, use_2d(p); p->load_vector_Nm[0] = R(-10.0))
 GM(g_2d_mat_zero, use_2d(p); p->efficiency_matrix[1][2] = R(0.0))
 GM(g_2d_mat_big, use_2d(p); p->efficiency_matrix[2][0] = R(1.5))
 GM(g_2d_mat_nan, use_2d(p); p->efficiency_matrix[0][1] = R(NAN))
+GM(g_2d_mat_tiny, use_2d(p); p->efficiency_matrix[2][2] = TINY_POSITIVE) /* 1/eta overflows */
+GM(g_eta_tiny, use_constant(p); p->efficiency_const = TINY_POSITIVE)
 GM(g_2d_tcount, use_2d(p); p->temperature_count = 1)
 GM(g_2d_t_dec, use_2d(p); p->temperature_vector_K[2] = R(290.0))
 GM(g_2d_cmass, use_2d(p); p->thermal_mass_J_K = R(-1.0))
@@ -228,6 +230,8 @@ static const gear_case gear_cases[] = {
     {"efficiency_matrix > 1", g_2d_mat_big, GS_E_EFFICIENCY_RANGE, "efficiency_matrix", NULL,
      GS_OK},
     {"efficiency_matrix NaN", g_2d_mat_nan, GS_E_NOT_FINITE, "efficiency_matrix", NULL, GS_OK},
+    {"efficiency_matrix subnormal", g_2d_mat_tiny, GS_E_MAGNITUDE, "efficiency_matrix", NULL, GS_OK},
+    {"efficiency_const subnormal", g_eta_tiny, GS_E_MAGNITUDE, "efficiency_const", NULL, GS_OK},
     {"2-D temperature_count 1", g_2d_tcount, GS_E_TABLE_LENGTH, "temperature_vector", NULL, GS_OK},
     {"2-D temperature_vector decreasing", g_2d_t_dec, GS_E_TABLE_NOT_INCREASING,
      "temperature_vector", NULL, GS_OK},

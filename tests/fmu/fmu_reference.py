@@ -2,8 +2,8 @@
 
 cffi in ABI mode over a plain shared build of the core (build/fmu/reference/
 libgearsim.so, or GEARSIM_LIB), declarations taken from the public headers run
-through the C preprocessor. The FMI-name to C-field mapping below is written
-here independently of fmu/src/gs_fmu_model.c, so the tests cross-check it.
+through the C preprocessor. The FMI-name to C-field mapping is read from the
+library's parameter tables (Reference.fields).
 """
 
 from __future__ import annotations
@@ -21,97 +21,12 @@ from typing import Any
 import cffi
 import numpy as np
 
-# ---- FMI name -> C field path ("block." = the rig's block params, "rig." = gs_rig_params)
-
-_BACKLASH = {
-    "backlash_enabled": "block.backlash.enabled",
-    "hard_stop_model": "block.backlash.hard_stop_model",
-    "linear_backlash": "block.backlash.linear_backlash_m",
-    "transition_region": "block.backlash.transition_region_m",
-    "stiffness": "block.backlash.stiffness_N_m",
-    "damping": "block.backlash.damping_N_s_m",
-    "initial_backlash_position": "block.backlash.initial_position_m",
-    "contact_no_pull": "block.backlash.no_pull",
-    "contact_lock_enabled": "block.backlash.lock_enabled",
-    "contact_speed_threshold": "block.backlash.contact_speed_threshold_m_s",
-    "contact_release_force": "block.backlash.contact_release_force_N",
-}
-
-_RIG = {
-    "dt": "rig.dt_s",
-    "base_drive": "rig.base_drive",
-    "base_inertia": "rig.base_inertia_kg_m2",
-    "initial_base_speed": "rig.initial_base_speed_rad_s",
-    "load_coulomb_friction": "rig.load_coulomb_friction",
-    "load_coulomb_speed_threshold": "rig.load_coulomb_speed_threshold",
-    "load_offset": "rig.load_offset",
-    "heat_path": "rig.heat_path",
-    "thermal_resistance": "rig.thermal_resistance_K_W",
-    "temperature_input": "rig.temperature_source",
-    "accel_filter_time_constant": "rig.accel_filter_time_constant_s",
-    "contact_substeps": "rig.contact_substeps",
-    "load_breakaway_friction": "rig.load_breakaway_friction",
-    "load_stribeck_speed": "rig.load_stribeck_speed",
-    "compliance_stiffness": "rig.compliance_stiffness_Nm_rad",
-    "compliance_damping": "rig.compliance_damping_Nm_s_rad",
-    "ripple_revolution_amplitude": "rig.ripple_revolution_amplitude_Nm",
-    "ripple_revolution_phase": "rig.ripple_revolution_phase_rad",
-    "ripple_mesh_amplitude": "rig.ripple_mesh_amplitude_Nm",
-    "ripple_mesh_phase": "rig.ripple_mesh_phase_rad",
-    "ripple_mesh_teeth": "rig.ripple_mesh_teeth",
-    "load_friction_regularised": "rig.load_friction_regularised",
-    "base_speed_ramp": "rig.base_speed_ramp",
-}
-
-GEAR_FIELDS: dict[str, str] = {
-    "teeth_ratio": "block.teeth_ratio",
-    "output_shaft_rotates": "block.output_shaft_rotates",
-    "friction_model": "block.friction_model",
-    "loss_smoothing": "block.loss_smoothing",
-    "efficiency_const": "block.efficiency_const",
-    "power_threshold": "block.power_threshold_W",
-    "idle_torque": "block.idle_torque_Nm",
-    "nominal_output_torque": "block.nominal_output_torque_Nm",
-    "efficiency_nominal": "block.efficiency_nominal",
-    "speed_threshold": "block.speed_threshold_rad_s",
-    "temperature_count": "block.temperature_count",
-    "temperature_vector": "block.temperature_vector_K",
-    "efficiency_vector": "block.efficiency_vector",
-    "load_count": "block.load_count",
-    "load_vector": "block.load_vector_Nm",
-    "efficiency_matrix": "block.efficiency_matrix",
-    "viscous_coefficients": "block.viscous_coefficients",
-    "thermal_mass": "block.thermal_mass_J_K",
-    "initial_temperature": "block.initial_temperature_K",
-    "base_radius": "block.backlash.base_radius_m",
-    "follower_inertia": "rig.driven_inertia",
-    **_BACKLASH,
-    **_RIG,
-}
-
-RACK_FIELDS: dict[str, str] = {
-    "parameterization": "block.parameterization",
-    "pinion_radius": "block.pinion_radius_m",
-    "teeth_count": "block.teeth_count",
-    "spacing": "block.spacing_m",
-    "rack_directionality": "block.rack_directionality",
-    "friction_model": "block.friction_model",
-    "loss_smoothing": "block.loss_smoothing",
-    "efficiency_const": "block.efficiency_const",
-    "temperature_count": "block.temperature_count",
-    "temperature_vector": "block.temperature_vector_K",
-    "efficiency_vector": "block.efficiency_vector",
-    "power_threshold": "block.power_threshold_W",
-    "pinion_viscous_coefficient": "block.pinion_viscous_coefficient",
-    "rack_viscous_coefficient": "block.rack_viscous_coefficient",
-    "thermal_mass": "block.thermal_mass_J_K",
-    "initial_temperature": "block.initial_temperature_K",
-    "rack_mass": "rig.driven_inertia",
-    **_BACKLASH,
-    **_RIG,
-}
-
-FIELDS = {"gear": GEAR_FIELDS, "rack": RACK_FIELDS}
+# ---- FMI name -> C field path ("block." = the rig's block params, "rig." = gs_rig_params):
+# Reference.fields(rig), read from the library's parameter tables
+# (gs_*_param_info of include/gearsim/parameters.h), which the FMU is generated
+# from too. What the tests check independently of those tables: every leaf of
+# the C structs (walked through cffi) is an FMI parameter, start values are
+# the C defaults, and the units and variabilities named in test_fmu_rigs.py.
 
 # The rig's inputs and outputs carry the names of gearsim/fields.h in every
 # layer. The FMU's inputs sit under the structured prefix "inputs." (an input
@@ -211,9 +126,33 @@ class Reference:
             obj = getattr(obj, part)
         return obj, rest[-1]
 
+    def fields(self, rig: str) -> dict[str, str]:
+        """FMI parameter name -> C field path ("block.backlash.stiffness_N_m",
+        "rig.driven_inertia"), from the library's parameter tables."""
+        rack = rig == "rack"
+        string = self.ffi.string
+        lib = self.lib
+        out: dict[str, str] = {}
+
+        def walk(table: Any, count: int, path: str) -> None:
+            for i in range(count):
+                e = table[i]
+                member = f"{path}{string(e.member).decode()}"
+                if e.kind == lib.GS_PARAM_GROUP:
+                    walk(e.members, e.member_count, f"{member}.")
+                elif not (rack and e.flags == lib.GS_PARAM_GEAR_ONLY):
+                    out[string(e.rack_key if rack else e.key).decode()] = member
+
+        walk(lib.gs_rig_param_info, len(lib.gs_rig_param_info), "rig.")
+        if rack:
+            walk(lib.gs_rack_pinion_param_info, len(lib.gs_rack_pinion_param_info), "block.")
+        else:
+            walk(lib.gs_simple_gear_param_info, len(lib.gs_simple_gear_param_info), "block.")
+        return out
+
     def get(self, rig: str, structs: Mapping[str, Any], fmi_name: str) -> float:
         base, idx = split_name(fmi_name)
-        obj, field = self._locate(structs, FIELDS[rig][base])
+        obj, field = self._locate(structs, self.fields(rig)[base])
         value = getattr(obj, field)
         for i in idx:
             value = value[i]
@@ -221,7 +160,7 @@ class Reference:
 
     def set(self, rig: str, structs: Mapping[str, Any], fmi_name: str, value: Any) -> None:
         base, idx = split_name(fmi_name)
-        obj, field = self._locate(structs, FIELDS[rig][base])
+        obj, field = self._locate(structs, self.fields(rig)[base])
         if not idx:
             setattr(obj, field, int(value) if isinstance(value, (bool, np.bool_)) else value)
             return

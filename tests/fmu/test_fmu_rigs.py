@@ -26,7 +26,6 @@ fmpy = pytest.importorskip("fmpy", reason="fmpy is not installed: run scripts/bu
 from fmpy.fmi1 import FMICallException  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
 from fmu_reference import (  # noqa: E402
-    FIELDS,
     INPUT_PREFIX,
     INPUTS,
     OUTPUTS,
@@ -72,7 +71,7 @@ def test_fmu_layout(fmus, model_descriptions, rig):
 def test_every_parameter_with_c_default_and_unit(model_descriptions, reference, rig):
     """Every leaf of the C params structs is an FMI parameter, with the C default."""
     md = model_descriptions[rig]
-    fields = FIELDS[rig]
+    fields = reference.fields(rig)
     params = [v for v in md.modelVariables if v.causality == "parameter"]
     structs = reference.default_params(rig)
     seen_bases = set()

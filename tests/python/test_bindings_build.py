@@ -16,7 +16,10 @@ import pytest
 from gearsim._lib import INPUT_INFO, OUTPUT_INFO, STATE_INFO, ffi, lib
 
 ROOT = Path(__file__).resolve().parents[2]
-HEADERS = sorted((ROOT / "include" / "gearsim").glob("*.h"))
+# the core's public headers and the HIL library's, which the cdef is made of
+HEADERS = sorted((ROOT / "include" / "gearsim").glob("*.h")) + [
+    ROOT / "hil" / "include" / "gearsim" / "hil.h"
+]
 
 
 def _build_module():
@@ -59,7 +62,22 @@ def _public_api() -> tuple[set[str], set[str]]:
 def test_the_header_scan_finds_the_api():
     functions, tables = _public_api()
     assert {"gs_rig_init_gear", "gs_rig_step", "gs_rig_run", "gs_version"} <= functions
-    assert tables == {"gs_rig_input_info", "gs_rig_output_info", "gs_rig_state_info"}
+    assert tables == set(FIELD_TABLES) | set(PARAM_TABLES)
+
+
+#: The exported tables: field tables (gearsim/fields.h) and parameter tables
+#: (gearsim/parameters.h), with the constant that gives their length.
+FIELD_TABLES = {
+    "gs_rig_input_info": "GS_RIG_INPUT_FIELDS",
+    "gs_rig_output_info": "GS_RIG_OUTPUT_FIELDS",
+    "gs_rig_state_info": "GS_RIG_STATE_FIELDS",
+}
+PARAM_TABLES = {
+    "gs_rig_param_info": "GS_RIG_PARAM_FIELDS",
+    "gs_simple_gear_param_info": "GS_SIMPLE_GEAR_PARAM_FIELDS",
+    "gs_rack_pinion_param_info": "GS_RACK_PINION_PARAM_FIELDS",
+    "gs_backlash_param_info": "GS_BACKLASH_PARAM_FIELDS",
+}
 
 
 def test_every_public_function_and_table_is_in_the_cdef():
@@ -69,15 +87,23 @@ def test_every_public_function_and_table_is_in_the_cdef():
         assert re.search(rf"\b{name}\s*\(", cdef), name
         assert ffi.typeof(getattr(lib, name)).kind == "function", name
     for name in sorted(tables):
-        assert re.search(rf"\bextern const gs_field_info {name}\[\s*\w+\s*\];", cdef), name
+        item = "gs_field_info" if name in FIELD_TABLES else "gs_param_info"
+        assert re.search(rf"\bextern const {item} {name}\[[^\]]+\];", cdef), name
         table_type = ffi.typeof(getattr(lib, name))
-        assert table_type.item is ffi.typeof("gs_field_info")
-        count = {
-            "input": lib.GS_RIG_INPUT_FIELDS,
-            "output": lib.GS_RIG_OUTPUT_FIELDS,
-            "state": lib.GS_RIG_STATE_FIELDS,
-        }[name.split("_")[2]]
+        assert table_type.item is ffi.typeof(item)
+        count = getattr(lib, {**FIELD_TABLES, **PARAM_TABLES}[name])
         assert table_type.length == count, name
+
+
+def test_the_hil_library_is_in_the_cdef():
+    """gearsim.hil runs the C HIL library: every function of gearsim/hil.h
+    is callable, and the send callback is the bindings' own."""
+    code = _header_code()
+    declared = set(re.findall(r"\b(gs_hil_\w+)\s*\(", code))
+    assert {"gs_hil_bridge_init", "gs_hil_handle", "gs_hil_advance", "gs_hil_dbc_check"} <= declared
+    for name in sorted(declared):
+        assert ffi.typeof(getattr(lib, name)).kind == "function", name
+    assert ffi.typeof(lib.gspy_hil_send) is ffi.typeof("int(*)(void *, const gs_hil_frame *)")
 
 
 def test_the_extension_was_built_from_these_headers():
@@ -122,7 +148,7 @@ def test_struct_layouts_are_the_compilers():
             ), f"{ctype}.{member}"
         else:
             assert ffi.sizeof(ctype) == row.size, ctype
-    declared = set(re.findall(r"typedef\s+struct\s*\{[^}]*\}\s*(\w+)\s*;", _header_code()))
+    declared = set(re.findall(r"typedef\s+struct\s*\w*\s*\{[^}]*\}\s*(\w+)\s*;", _header_code()))
     assert declared == types
     assert {"gs_rig_state", "gs_rig_consts", "gs_block_state", "gs_rig_info"} <= types
 
@@ -158,6 +184,45 @@ def test_field_tables_agree_with_the_cdef():
         assert dict(owner.fields)[f.name].type is ffi.typeof(kind)
 
 
+def test_parameter_tables_agree_with_the_cdef():
+    """The parameter tables (gearsim/parameters.h, compiled into the library)
+    name the cdef's members, at its offsets and sizes, in member order, and
+    their option values are the cdef's enumerators."""
+
+    def check(table, count: int, ctype: str) -> int:
+        fields = ffi.typeof(ctype).fields
+        assert [ffi.string(table[i].member).decode() for i in range(count)] == [
+            n for n, _ in fields
+        ]
+        options = 0
+        for i in range(count):
+            e = table[i]
+            member = ffi.string(e.member).decode()
+            assert ffi.offsetof(ctype, member) == e.offset, member
+            assert ffi.sizeof(dict(fields)[member].type) == e.size, member
+            if e.kind == lib.GS_PARAM_GROUP:
+                options += check(e.members, e.member_count, dict(fields)[member].type.cname)
+            for k in range(e.options.count):
+                item = e.options.items[k]
+                assert getattr(lib, ffi.string(item.enumerator).decode()) == item.value
+                options += 1
+        return options
+
+    assert check(lib.gs_rig_param_info, lib.GS_RIG_PARAM_FIELDS, "gs_rig_params") == 4
+    assert (
+        check(
+            lib.gs_simple_gear_param_info, lib.GS_SIMPLE_GEAR_PARAM_FIELDS, "gs_simple_gear_params"
+        )
+        == 12
+    )
+    assert (
+        check(
+            lib.gs_rack_pinion_param_info, lib.GS_RACK_PINION_PARAM_FIELDS, "gs_rack_pinion_params"
+        )
+        == 12
+    )
+
+
 def test_every_header_constant_and_enumerator_reaches_python():
     text = "\n".join(h.read_text() for h in HEADERS)
     macros = set(re.findall(r"^\s*#\s*define\s+(GS_[A-Z0-9_]+)[ \t]+\S", text, flags=re.M))
@@ -167,7 +232,10 @@ def test_every_header_constant_and_enumerator_reaches_python():
     enumerators = re.findall(
         r"^\s*(GS_[A-Z0-9_]+)\s*=\s*(-?\d+)[ \t]*,?[ \t]*$", _header_code(), re.M
     )
-    assert len(enumerators) > 30
+    # with explicit values: the statuses, the parameter kinds, the rig blocks
+    # (the option enums take 0, 1, ... from their lists: checked with the
+    # parameter tables above)
+    assert len(enumerators) >= 30
     for name, value in enumerators:
         assert getattr(lib, name) == int(value), name
     version = re.search(r'#define\s+GS_VERSION_STRING\s+"([^"]+)"', text).group(1)

@@ -63,6 +63,23 @@ def GEARSIM_ATTEMPTS():
 
 
 sys.meta_path.insert(0, _NotInstalled())
+
+# a probe with importlib.util.find_spec (pint looks for dask that way) gets
+# what it gets for a module that is not installed: None
+import importlib.util as _util
+
+_real_find_spec = _util.find_spec
+
+
+def _find_spec(name, package=None):
+    if name.partition(".")[0] in _BLOCKED:
+        frame = sys._getframe(1)
+        ATTEMPTS.append((name, frame.f_code.co_filename))
+        return None
+    return _real_find_spec(name, package)
+
+
+_util.find_spec = _find_spec
 """
 
 
@@ -323,6 +340,8 @@ def _distribution(requirement: str) -> str:
 
 #: Distribution name -> the top-level module it installs, where they differ.
 _MODULE_OF = {"python-can": "can"}
+#: A requirement with an extra -> the top-level modules it installs.
+_REQUIREMENT_MODULES = {"dask[distributed]": ("dask", "distributed")}
 
 
 def test_table_matches_pyproject():
@@ -331,12 +350,30 @@ def test_table_matches_pyproject():
     assert core == {"numpy", "cffi", "pint", "tomli-w"}
     extras = project["optional-dependencies"]
     for extra, modules in EXTRAS.items():
-        dists = [_distribution(r) for r in extras[extra]]
-        assert tuple(_MODULE_OF.get(d, d) for d in dists) == modules, extra
+        # an extra may name another of gearsim's own ("gearsim[analysis]"), and a
+        # requirement with an extra brings that extra's modules too
+        reqs = [r for r in extras[extra] if not r.startswith("gearsim[")]
+        got = tuple(
+            m
+            for r in reqs
+            for m in _REQUIREMENT_MODULES.get(
+                r.split(">")[0], (_MODULE_OF.get(_distribution(r), _distribution(r)),)
+            )
+        )
+        assert got == modules, extra
+    assert "gearsim[analysis]" in extras["fleet"]
     # all: every extra but the test tooling, with the same pins
-    union = {r for name, reqs in extras.items() if name not in ("all", "test") for r in reqs}
+    union = {
+        r
+        for name, reqs in extras.items()
+        if name not in ("all", "test")
+        for r in reqs
+        if not r.startswith("gearsim[")
+    }
     assert set(extras["all"]) == union
-    assert {_distribution(r) for r in extras["test"]} == {"pytest", "hypothesis"}
+    # the test tooling: pytest, hypothesis, build for the sdist of scripts/package_check.sh,
+    # xmlschema for the JUnit verdicts of the HIL scenarios (tests/python/hil/junit.xsd)
+    assert {_distribution(r) for r in extras["test"]} == {"pytest", "hypothesis", "build", "xmlschema"}
     assert set(extras["bench"]) <= set(extras["analysis"])
 
 
@@ -358,3 +395,26 @@ def test_hil_exports_resolve():
     )
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "True True"
+
+
+@pytest.mark.parametrize(
+    "blocked, extra, module",
+    [
+        (("dask",), "fleet", "dask"),
+        (("pyarrow",), "fleet", "pyarrow"),
+        (OPTIONAL_MODULES, "analysis", "scipy"),
+    ],
+)
+def test_fleet_command_names_the_extra(tmp_path, blocked, extra, module):
+    argv = [
+        "fleet",
+        str(DEMO_CSV.parent),
+        "--model",
+        str(DEMO_MODEL),
+        "--out",
+        str(tmp_path / "out"),
+        "--add",
+        "coulomb_friction",
+    ]
+    _expect_one_line(_cli_blocked(argv, blocked), "gearsim fleet", extra, module)
+    assert list(tmp_path.iterdir()) == []

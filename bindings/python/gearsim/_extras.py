@@ -21,6 +21,7 @@ EXTRAS: dict[str, tuple[str, ...]] = {
     "analysis": ("scipy", "pandas", "zstandard", "matplotlib", "threadpoolctl"),
     "hil": ("can", "cantools"),
     "fmu": ("fmpy",),
+    "fleet": ("dask", "distributed", "pyarrow", "tqdm"),
 }
 
 

@@ -288,6 +288,10 @@ class RackPinion(Block):
         }
 
 
+for _cls in (SimpleGear, RackPinion):
+    _cls.__doc__ = f"{_cls.__doc__}\n\n    Parameters:\n\n{P.describe(_cls._specs.values())}\n"
+del _cls
+
 BLOCK_CLASSES: dict[str, type[Block]] = {"simple_gear": SimpleGear, "rack_pinion": RackPinion}
 
 

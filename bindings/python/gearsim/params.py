@@ -1,5 +1,9 @@
-"""Parameter tables: program name, kind, SI unit and C field of every block and
-rig parameter, declared once (docs/physics.md sections 9-11, docs/python-api.md).
+"""The parameters of the blocks and rigs: program name, kind, SI unit, C field
+and description of each, read from the C core's parameter tables
+(gs_simple_gear_param_info, gs_rack_pinion_param_info, gs_backlash_param_info,
+gs_rig_param_info), which are expanded from the one declaration of every
+parameter, include/gearsim/parameters.h. Nothing about a parameter is written
+here (docs/physics.md sections 9-11, docs/python-api.md).
 
 This module converts user values (plain SI numbers, unit strings, lists) into
 normalised Python values, writes them into the C ``*_params`` structs and reads
@@ -13,8 +17,8 @@ types, table capacity, and the lengths of tables that share one C count
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, replace
 from numbers import Integral, Real
 from typing import Any
 
@@ -37,7 +41,7 @@ __all__ = [
 REAL = "real"  # float
 VECTOR = "vector"  # list of floats (a table of up to GS_TABLE_MAX entries)
 MATRIX = "matrix"  # list of rows (lists of floats)
-PAIR = "pair"  # list of exactly 2 floats
+ARRAY = "array"  # list of exactly Param.length floats
 OPTION = "option"  # one string of a fixed list
 BOOL = "bool"
 INT = "int"
@@ -49,13 +53,17 @@ class Param:
     """One user parameter.
 
     name: program name (TOML key, Python keyword, error ``.parameter``).
-    kind: REAL, VECTOR, MATRIX, PAIR, OPTION, BOOL, INT or OPTIONAL_REAL.
+    kind: REAL, VECTOR, MATRIX, ARRAY, OPTION, BOOL, INT or OPTIONAL_REAL.
     unit: SI unit in pint syntax ("" = dimensionless); unit strings given by the
         user are converted to it.
     field: C field path in the params struct ("backlash.stiffness_N_m"), or ""
         for a parameter that lives only in Python.
-    count: C field holding the length of a VECTOR ("temperature_count"), if any.
-    options: (Python value, C enum constant) pairs of an OPTION.
+    count: C field holding the used length of a VECTOR, or the rows of a MATRIX.
+    count2: C field holding the columns of a MATRIX.
+    sets_count: writing this VECTOR sets its count (the first table that names
+        a count owns it; later ones must have the same length where used).
+    length: number of values of an ARRAY.
+    options: (option string, C enum value) pairs of an OPTION.
     doc: one line for the documentation.
     """
 
@@ -64,442 +72,129 @@ class Param:
     unit: str = ""
     field: str = ""
     count: str = ""
-    options: tuple[tuple[str, str], ...] = ()
+    count2: str = ""
+    sets_count: bool = False
+    length: int = 0
+    options: tuple[tuple[str, int], ...] = ()
     doc: str = ""
 
     def option_value(self, text: str) -> int:
-        """C enum value of an option string (read from the compiled library)."""
-        return int(getattr(lib, dict(self.options)[text]))
+        """C enum value of an option string."""
+        return dict(self.options)[text]
 
     def option_text(self, value: int) -> str:
-        for text, const in self.options:
-            if int(getattr(lib, const)) == int(value):
+        for text, c_value in self.options:
+            if c_value == int(value):
                 return text
         raise ValueError(f"{self.name}: C value {value} has no option string")  # pragma: no cover
 
 
-_FRICTION_SG = (
-    ("none", "GS_FRICTION_NONE"),
-    ("constant_efficiency", "GS_FRICTION_CONSTANT_EFFICIENCY"),
-    ("load_dependent_efficiency", "GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY"),
-    ("temperature_dependent_efficiency", "GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY"),
-    ("temperature_load_dependent_efficiency", "GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY"),
-)
-_FRICTION_RP = (_FRICTION_SG[0], _FRICTION_SG[1], _FRICTION_SG[3])
-_SMOOTHING = (("passive", "GS_SMOOTHING_PASSIVE"), ("simscape", "GS_SMOOTHING_SIMSCAPE"))
-_HARD_STOP = (
-    ("smooth", "GS_HARD_STOP_SMOOTH"),
-    ("full_undamped", "GS_HARD_STOP_FULL_UNDAMPED"),
-    ("full_damped", "GS_HARD_STOP_FULL_DAMPED"),
-)
+# ---------------------------------------------------------------- the C tables
 
 
-def _backlash(with_base_radius: bool) -> tuple[Param, ...]:
-    params = [
-        Param("backlash_enabled", BOOL, field="backlash.enabled", doc="enable backlash"),
-        Param(
-            "hard_stop_model",
-            OPTION,
-            field="backlash.hard_stop_model",
-            options=_HARD_STOP,
-            doc="hard-stop contact law",
-        ),
-        Param(
-            "linear_backlash",
-            REAL,
-            "m",
-            "backlash.linear_backlash_m",
-            doc="total free travel b at the pitch line",
-        ),
-    ]
-    if with_base_radius:
-        params.append(
+def _text(p: Any) -> str:
+    return ffi.string(p).decode("utf-8") if p != ffi.NULL else ""
+
+
+_KINDS = {
+    int(lib.GS_PARAM_REAL): REAL,
+    int(lib.GS_PARAM_INT): INT,
+    int(lib.GS_PARAM_BOOL): BOOL,
+    int(lib.GS_PARAM_OPTION): OPTION,
+    int(lib.GS_PARAM_ARRAY): ARRAY,
+    int(lib.GS_PARAM_TABLE): VECTOR,
+    int(lib.GS_PARAM_MATRIX): MATRIX,
+}
+
+
+def _entries(table: Any, count: int, prefix: str = "") -> Iterator[tuple[Any, str, str]]:
+    """(entry, C field path, field path prefix) of a C parameter table, nested
+    groups (the backlash) flattened in member order."""
+    for i in range(count):
+        e = table[i]
+        if int(e.kind) == int(lib.GS_PARAM_GROUP):
+            yield from _entries(e.members, int(e.member_count), f"{prefix}{_text(e.member)}.")
+        else:
+            yield e, prefix + _text(e.member), prefix
+
+
+def _options(e: Any) -> tuple[tuple[str, int], ...]:
+    o = e.options
+    return tuple((_text(o.items[k].name), int(o.items[k].value)) for k in range(int(o.count)))
+
+
+def _from_table(table: Any, count: int, rack: bool) -> tuple[Param, ...]:
+    """The user parameters of a C parameter table in one rig: the counts are
+    set from the tables' lengths, not given; GEAR_ONLY entries are left out of
+    the rack rig."""
+    specs = []
+    owned: set[str] = set()
+    for e, field, prefix in _entries(table, count):
+        kind = int(e.kind)
+        if kind == int(lib.GS_PARAM_COUNT) or (
+            rack and int(e.flags) == int(lib.GS_PARAM_GEAR_ONLY)
+        ):
+            continue
+        counter = prefix + _text(e.count) if _text(e.count) else ""
+        sets_count = kind == int(lib.GS_PARAM_TABLE) and counter not in owned
+        if sets_count:
+            owned.add(counter)
+        specs.append(
             Param(
-                "base_radius", REAL, "m", "backlash.base_radius_m", doc="base gear pitch radius r_B"
+                name=_text(e.rack_key if rack else e.key),
+                kind=_KINDS[kind],
+                unit=_text(e.rack_unit if rack else e.gear_unit),
+                field=field,
+                count=counter,
+                count2=prefix + _text(e.count2) if _text(e.count2) else "",
+                sets_count=sets_count,
+                length=int(e.length),
+                options=_options(e),
+                doc=_text(e.doc),
             )
         )
-    params += [
-        Param(
-            "transition_region",
-            REAL,
-            "m",
-            "backlash.transition_region_m",
-            doc="transition region d of the smooth model",
-        ),
-        Param("stiffness", REAL, "N/m", "backlash.stiffness_N_m", doc="contact stiffness K"),
-        Param("damping", REAL, "N*s/m", "backlash.damping_N_s_m", doc="contact damping D"),
-        Param(
-            "initial_backlash_position",
-            REAL,
-            "m",
-            "backlash.initial_position_m",
-            doc="initial position x0 in [-b/2, b/2]",
-        ),
-        Param(
-            "contact_speed_threshold",
-            REAL,
-            "m/s",
-            "backlash.contact_speed_threshold_m_s",
-            doc="static contact speed threshold (lock mode)",
-        ),
-        Param(
-            "contact_release_force",
-            REAL,
-            "N",
-            "backlash.contact_release_force_N",
-            doc="static contact release force threshold (lock mode)",
-        ),
-        Param(
-            "contact_no_pull",
-            BOOL,
-            field="backlash.no_pull",
-            doc="the contact force never pulls the teeth together",
-        ),
-        Param(
-            "contact_lock_enabled", BOOL, field="backlash.lock_enabled", doc="static contact lock"
-        ),
-    ]
-    return tuple(params)
+    return tuple(specs)
 
 
-# The groups below mean the same in both blocks (same name, unit and C field in
-# gs_simple_gear_params and gs_rack_pinion_params), so each is declared once.
-
-
-def _mesh_loss(friction_options: tuple[tuple[str, str], ...]) -> tuple[Param, ...]:
-    """friction_model (the block's own list of models), loss_smoothing, efficiency_const."""
-    return (
-        Param(
-            "friction_model",
-            OPTION,
-            field="friction_model",
-            options=friction_options,
-            doc="meshing-loss model",
-        ),
-        Param(
-            "loss_smoothing",
-            OPTION,
-            field="loss_smoothing",
-            options=_SMOOTHING,
-            doc="power-threshold smoothing law",
-        ),
-        Param("efficiency_const", REAL, "", "efficiency_const", doc="constant efficiency"),
-    )
-
-
-# The temperature-dependent efficiency table: efficiency_vector has no C count of
-# its own, it shares temperature_count.
-_TEMPERATURE_TABLE = (
-    Param(
-        "temperature_vector",
-        VECTOR,
-        "K",
-        "temperature_vector_K",
-        "temperature_count",
-        doc="temperature breakpoints",
-    ),
-    Param(
-        "efficiency_vector", VECTOR, "", "efficiency_vector", doc="efficiency at each temperature"
-    ),
+SIMPLE_GEAR_PARAMS: tuple[Param, ...] = _from_table(
+    lib.gs_simple_gear_param_info, lib.GS_SIMPLE_GEAR_PARAM_FIELDS, rack=False
+)
+RACK_PINION_PARAMS: tuple[Param, ...] = _from_table(
+    lib.gs_rack_pinion_param_info, lib.GS_RACK_PINION_PARAM_FIELDS, rack=True
 )
 
-# The thermal port.
-_THERMAL = (
-    Param("thermal_mass", REAL, "J/K", "thermal_mass_J_K", doc="thermal mass"),
-    Param("initial_temperature", REAL, "K", "initial_temperature_K", doc="initial temperature"),
+# The Python rig takes the step and the temperature source as arguments of
+# Rig (dt=..., temperature_input=...), not as model-file keys; it sets the
+# heat path from thermal_resistance (absent = adiabatic); and it has one
+# parameter of its own, the ambient temperature that run() and step() use when
+# they are given none.
+RIG_ARGUMENTS = ("dt", "temperature_input")
+_HEAT_PATH = "heat_path"
+_OPTIONAL = "thermal_resistance"
+_AMBIENT = Param(
+    "ambient_temperature", REAL, "K", doc="ambient temperature used when run/step get none"
 )
-
-
-SIMPLE_GEAR_PARAMS: tuple[Param, ...] = (
-    Param("teeth_ratio", REAL, "", "teeth_ratio", doc="follower-to-base teeth ratio N_F/N_B"),
-    Param(
-        "output_shaft_rotates",
-        OPTION,
-        field="output_shaft_rotates",
-        options=(("same", "GS_ROTATES_SAME"), ("opposite", "GS_ROTATES_OPPOSITE")),
-        doc="follower rotation relative to the base",
-    ),
-    *_mesh_loss(_FRICTION_SG),
-    Param("power_threshold", REAL, "W", "power_threshold_W", doc="follower power threshold"),
-    Param("idle_torque", REAL, "N*m", "idle_torque_Nm", doc="input shaft torque at no load"),
-    Param(
-        "nominal_output_torque",
-        REAL,
-        "N*m",
-        "nominal_output_torque_Nm",
-        doc="nominal output torque",
-    ),
-    Param(
-        "efficiency_nominal",
-        REAL,
-        "",
-        "efficiency_nominal",
-        doc="efficiency at nominal output torque",
-    ),
-    Param(
-        "speed_threshold",
-        REAL,
-        "rad/s",
-        "speed_threshold_rad_s",
-        doc="follower angular velocity threshold",
-    ),
-    *_TEMPERATURE_TABLE,
-    Param(
-        "load_vector",
-        VECTOR,
-        "N*m",
-        "load_vector_Nm",
-        "load_count",
-        doc="base-gear load breakpoints",
-    ),
-    Param(
-        "efficiency_matrix",
-        MATRIX,
-        "",
-        "efficiency_matrix",
-        doc="efficiency, one row per temperature, one column per load",
-    ),
-    *_backlash(with_base_radius=True),
-    Param(
-        "viscous_coefficients",
-        PAIR,
-        "N*m*s/rad",
-        "viscous_coefficients",
-        doc="viscous coefficients [mu_B, mu_F]",
-    ),
-    *_THERMAL,
-)
-
-RACK_PINION_PARAMS: tuple[Param, ...] = (
-    Param(
-        "parameterization",
-        OPTION,
-        field="parameterization",
-        options=(
-            ("pinion_radius", "GS_PARAMETERIZE_PINION_RADIUS"),
-            ("tooth_parameters", "GS_PARAMETERIZE_TOOTH_PARAMETERS"),
-        ),
-        doc="pinion radius or tooth parameters",
-    ),
-    Param("pinion_radius", REAL, "m", "pinion_radius_m", doc="pinion radius r_P"),
-    Param("teeth_count", REAL, "", "teeth_count", doc="number of pinion teeth N_P"),
-    Param("spacing", REAL, "m", "spacing_m", doc="rack tooth spacing x_R"),
-    Param(
-        "rack_directionality",
-        OPTION,
-        field="rack_directionality",
-        options=(("positive", "GS_RACK_POSITIVE"), ("negative", "GS_RACK_NEGATIVE")),
-        doc="rack direction for positive pinion rotation",
-    ),
-    *_mesh_loss(_FRICTION_RP),
-    *_TEMPERATURE_TABLE,
-    Param("power_threshold", REAL, "W", "power_threshold_W", doc="rack power threshold"),
-    Param(
-        "pinion_viscous_coefficient",
-        REAL,
-        "N*m*s/rad",
-        "pinion_viscous_coefficient",
-        doc="pinion viscous coefficient",
-    ),
-    Param(
-        "rack_viscous_coefficient",
-        REAL,
-        "N*s/m",
-        "rack_viscous_coefficient",
-        doc="rack viscous coefficient",
-    ),
-    *_THERMAL,
-    *_backlash(with_base_radius=False),
-)
-
-
-def _rig_params(
-    driven: str, driven_unit: str, load_unit: str, speed_unit: str
-) -> tuple[Param, ...]:
-    return (
-        Param(
-            driven,
-            REAL,
-            driven_unit,
-            "driven_inertia",
-            doc="inertia of the follower shaft"
-            if driven == "follower_inertia"
-            else "mass of the rack",
-        ),
-        Param(
-            "load_coulomb_friction",
-            REAL,
-            load_unit,
-            "load_coulomb_friction",
-            doc="constant Coulomb friction on the driven side",
-        ),
-        Param(
-            "load_coulomb_speed_threshold",
-            REAL,
-            speed_unit,
-            "load_coulomb_speed_threshold",
-            doc="tanh smoothing speed of the driven-side Coulomb friction",
-        ),
-        Param(
-            "load_offset",
-            REAL,
-            load_unit,
-            "load_offset",
-            doc="constant bias on the driven side (gravity, cable drag)",
-        ),
-        Param(
-            "thermal_resistance",
-            OPTIONAL_REAL,
-            "K/W",
-            "thermal_resistance_K_W",
-            doc="housing-to-ambient thermal resistance; absent = adiabatic",
-        ),
-        Param(
-            "ambient_temperature", REAL, "K", doc="ambient temperature used when run/step get none"
-        ),
-        Param(
-            "base_inertia",
-            REAL,
-            "kg*m**2",
-            "base_inertia_kg_m2",
-            doc="base (pinion) shaft inertia; > 0 when torque-driven",
-        ),
-        Param(
-            "initial_base_speed",
-            REAL,
-            "rad/s",
-            "initial_base_speed_rad_s",
-            doc="torque-driven start speed",
-        ),
-        Param(
-            "accel_filter_time_constant",
-            REAL,
-            "s",
-            "accel_filter_time_constant_s",
-            doc="speed-driven: low-pass time constant of the base acceleration",
-        ),
-        Param(
-            "contact_substeps",
-            INT,
-            field="contact_substeps",
-            doc="backlash contact sub-steps per step, 0 = automatic",
-        ),
-        Param(
-            "base_drive",
-            OPTION,
-            field="base_drive",
-            options=(("speed", "GS_BASE_SPEED_DRIVEN"), ("torque", "GS_BASE_TORQUE_DRIVEN")),
-            doc="speed-driven or torque-driven base shaft",
-        ),
-        *_stribeck(load_unit, speed_unit),
-        *_COMPLIANCE,
-        *_RIPPLE,
-        *_SWITCHES,
-    )
-
-
-def _stribeck(load_unit: str, speed_unit: str) -> tuple[Param, ...]:
-    """The Stribeck hump of the driven side's friction (driven-side units)."""
-    return (
-        Param(
-            "load_breakaway_friction",
-            REAL,
-            load_unit,
-            "load_breakaway_friction",
-            doc="driven-side friction at rest (Stribeck); 0 = none, else >= load_coulomb_friction",
-        ),
-        Param(
-            "load_stribeck_speed",
-            REAL,
-            speed_unit,
-            "load_stribeck_speed",
-            doc="speed over which the friction falls from breakaway to Coulomb",
-        ),
-    )
-
-
-# The compliant base shaft and the ripple act on the base side: the same units
-# in both rigs (the pinion is the base of the rack rig).
-_COMPLIANCE = (
-    Param(
-        "compliance_stiffness",
-        REAL,
-        "N*m/rad",
-        "compliance_stiffness_Nm_rad",
-        doc="torsional stiffness of the base shaft, drive to base gear (with base_inertia 0: "
-        "at the mesh); 0 = rigid",
-    ),
-    Param(
-        "compliance_damping",
-        REAL,
-        "N*m*s/rad",
-        "compliance_damping_Nm_s_rad",
-        doc="torsional damping of the base shaft",
-    ),
-)
-
-_RIPPLE = (
-    Param(
-        "ripple_revolution_amplitude",
-        PAIR,
-        "N*m",
-        "ripple_revolution_amplitude_Nm",
-        doc="base-side ripple amplitudes of the 1st and 2nd harmonic per revolution",
-    ),
-    Param(
-        "ripple_revolution_phase",
-        PAIR,
-        "rad",
-        "ripple_revolution_phase_rad",
-        doc="phases of the per-revolution ripple harmonics",
-    ),
-    Param(
-        "ripple_mesh_amplitude",
-        PAIR,
-        "N*m",
-        "ripple_mesh_amplitude_Nm",
-        doc="base-side ripple amplitudes of the 1st and 2nd harmonic per tooth mesh",
-    ),
-    Param(
-        "ripple_mesh_phase",
-        PAIR,
-        "rad",
-        "ripple_mesh_phase_rad",
-        doc="phases of the per-tooth ripple harmonics",
-    ),
-    Param(
-        "ripple_mesh_teeth",
-        INT,
-        field="ripple_mesh_teeth",
-        doc="teeth of the base gear (pinion) per revolution; >= 1 with a mesh ripple",
-    ),
-)
-
-
-# Two switches of the rig's numerics (physics.md 11), both off by default.
-_SWITCHES = (
-    Param(
-        "load_friction_regularised",
-        BOOL,
-        field="load_friction_regularised",
-        doc="a freely moving driven side's friction is F*tanh(4 v/load_coulomb_speed_threshold) "
-        "(creeps, no stiction) instead of the set-valued Coulomb law",
-    ),
-    Param(
-        "base_speed_ramp",
-        BOOL,
-        field="base_speed_ramp",
-        doc="speed-driven rigid mesh: speed terms at the step's mean speed (the samples' linear "
-        "ramp), so every torque is a step mean",
-    ),
-)
-
-
-GEAR_RIG_PARAMS = _rig_params("follower_inertia", "kg*m**2", "N*m", "rad/s")
-RACK_RIG_PARAMS = _rig_params("rack_mass", "kg", "N", "m/s")
 
 #: Python-side default of the rig parameters the C rig does not hold.
-PYTHON_RIG_DEFAULTS: dict[str, Any] = {"thermal_resistance": None, "ambient_temperature": 293.15}
+PYTHON_RIG_DEFAULTS: dict[str, Any] = {_OPTIONAL: None, _AMBIENT.name: 293.15}
+
+
+def _rig_specs(rack: bool) -> tuple[tuple[Param, ...], dict[str, Param]]:
+    """The rig's model-file parameters, and its argument parameters (dt, ...)."""
+    all_specs = _from_table(lib.gs_rig_param_info, lib.GS_RIG_PARAM_FIELDS, rack)
+    specs: list[Param] = []
+    for p in all_specs:
+        if p.name in RIG_ARGUMENTS or p.name == _HEAT_PATH:
+            continue
+        if p.name == _OPTIONAL:
+            specs += [replace(p, kind=OPTIONAL_REAL, doc=f"{p.doc}; absent = adiabatic"), _AMBIENT]
+        else:
+            specs.append(p)
+    return tuple(specs), {p.name: p for p in all_specs if p.name in RIG_ARGUMENTS}
+
+
+GEAR_RIG_PARAMS, RIG_ARGUMENT_PARAMS = _rig_specs(rack=False)
+RACK_RIG_PARAMS, _ = _rig_specs(rack=True)
 
 #: Block name -> (block parameters, rig parameters, C params type, default function).
 BLOCKS: dict[str, tuple[tuple[Param, ...], tuple[Param, ...], str, str]] = {
@@ -518,6 +213,17 @@ BLOCKS: dict[str, tuple[tuple[Param, ...], tuple[Param, ...], str, str]] = {
 }
 
 
+def c_rig_names(block: str) -> dict[str, str]:
+    """C member of gs_rig_params -> the Python name in a rig of this block, where
+    they differ (to translate a gs_error that names a member)."""
+    rack = block == "rack_pinion"
+    return {
+        _text(e.member): _text(e.rack_key if rack else e.key)
+        for e, _, _ in _entries(lib.gs_rig_param_info, lib.GS_RIG_PARAM_FIELDS)
+        if _text(e.member) != _text(e.rack_key if rack else e.key)
+    }
+
+
 def units_of(specs: Iterable[Param]) -> dict[str, str]:
     """Parameter name -> SI unit (pint syntax) of the numeric parameters of specs."""
     return {p.name: p.unit for p in specs if p.kind not in (OPTION, BOOL, INT)}
@@ -527,6 +233,89 @@ def param_units(block: str) -> dict[str, str]:
     """Parameter name -> SI unit (pint syntax) of a block's block and rig parameters."""
     block_specs, rig_specs, _, _ = BLOCKS[block]
     return units_of((*block_specs, *rig_specs))
+
+
+def describe(specs: Iterable[Param]) -> str:
+    """One line per parameter (name, unit or options, description), for docstrings."""
+    lines = []
+    for p in specs:
+        if p.options:
+            what = " | ".join(repr(text) for text, _ in p.options)
+        elif p.kind in (BOOL, INT):
+            what = p.kind
+        else:
+            what = p.unit or "1"
+            if p.kind == ARRAY:
+                what = f"{p.length} values, {what}"
+            elif p.kind in (VECTOR, MATRIX):
+                what = f"{p.kind}, {what}"
+        lines.append(f"    {p.name} ({what}): {p.doc}")
+    return "\n".join(lines)
+
+
+# ---------------------------------------------------------------- documentation
+
+
+def _doc_number(x: float) -> str:
+    text = f"{x:.15g}"
+    return text.replace("e+0", "e").replace("e+", "e").replace("e-0", "e-")
+
+
+def _doc_value(p: Param, value: Any) -> str:
+    """A default as the docs write it."""
+    if value is None:
+        return "absent"
+    if p.kind == OPTION:
+        return f'`"{value}"`'
+    if p.kind == BOOL:
+        return "true" if value else "false"
+    if isinstance(value, list):
+        return "[" + ", ".join(_doc_value(p, v) for v in value) + "]"
+    if isinstance(value, int):
+        return str(value)
+    return _doc_number(float(value))
+
+
+def _doc_kind(p: Param, unit: str) -> str:
+    if p.options:
+        return " / ".join(f'`"{text}"`' for text, _ in p.options)
+    if p.kind in (BOOL, INT):
+        return {BOOL: "bool", INT: "integer"}[p.kind]
+    unit = unit or "–"
+    if p.kind == ARRAY:
+        return f"{p.length} values, {unit}"
+    return unit
+
+
+def markdown_table(block: str, part: str) -> str:
+    """The Markdown table of a block's "block" or "rig" parameters (key, SI
+    unit or options, default, meaning), from the C tables and defaults; the rig
+    table gives both rigs' names and units. docs/python.md carries these
+    (doc_tables() prints them; a test keeps them current)."""
+    rows = ["| key | SI unit / values | default | meaning |", "|---|---|---|---|"]
+    if part == "block":
+        specs, _, _, _ = BLOCKS[block]
+        defaults = block_defaults(block)
+        for p in specs:
+            what = _doc_kind(p, p.unit)
+            rows.append(f"| `{p.name}` | {what} | {_doc_value(p, defaults[p.name])} | {p.doc} |")
+        return "\n".join(rows)
+    rows[0] = "| key | SI unit / values (gear rig; rack rig) | default | meaning |"
+    rows.append('| `block` | `"simple_gear"` / `"rack_pinion"` | required | the block |')
+    gear_defaults = rig_defaults("simple_gear")
+    for g, r in zip(GEAR_RIG_PARAMS, RACK_RIG_PARAMS, strict=True):
+        name = f"`{g.name}`" if g.name == r.name else f"`{g.name}` (gear) / `{r.name}` (rack)"
+        what = _doc_kind(g, g.unit)
+        if r.unit != g.unit:
+            what = f"{what}; {_doc_kind(r, r.unit)}"
+        rows.append(f"| {name} | {what} | {_doc_value(g, gear_defaults[g.name])} | {g.doc} |")
+    return "\n".join(rows)
+
+
+def doc_tables() -> str:
+    """The three tables of docs/python.md: Simple Gear, Rack & Pinion, rig."""
+    parts = (("simple_gear", "block"), ("rack_pinion", "block"), ("simple_gear", "rig"))
+    return "\n\n".join(markdown_table(block, part) for block, part in parts)
 
 
 # ---------------------------------------------------------------- conversion
@@ -616,11 +405,11 @@ def normalize(p: Param, value: Any) -> Any:
                 status=status_name(lib.GS_E_OPTION),
             )
         return value
-    if kind in (VECTOR, PAIR):
+    if kind in (VECTOR, ARRAY):
         values = _vector(p, value)
-        if kind == PAIR and len(values) != 2:
+        if kind == ARRAY and len(values) != p.length:
             raise ParameterError(
-                f"needs exactly 2 values, got {len(values)}",
+                f"needs exactly {p.length} values, got {len(values)}",
                 parameter=p.name,
                 status=status_name(lib.GS_E_TABLE_SIZE_MISMATCH),
             )
@@ -702,13 +491,10 @@ def _set_field(struct: Any, path: str, value: Any) -> None:
 
 
 def read_struct(specs: Sequence[Param], struct: Any) -> dict[str, Any]:
-    """C params struct -> normalised values (used for the C defaults).
-
-    Vectors without a count of their own (efficiency_vector) take the count of
-    temperature_vector; efficiency_matrix is temperature_count x load_count.
-    """
+    """C params struct -> normalised values (used for the C defaults): tables
+    take their used length from their count field, the matrix is rows x
+    columns of its two counts."""
     out: dict[str, Any] = {}
-    counts = {p.name: int(_get_field(struct, p.count)) for p in specs if p.count}
     for p in specs:
         if not p.field:
             continue
@@ -721,14 +507,14 @@ def read_struct(specs: Sequence[Param], struct: Any) -> dict[str, Any]:
             out[p.name] = int(raw)
         elif p.kind == OPTION:
             out[p.name] = p.option_text(int(raw))
-        elif p.kind == PAIR:
-            out[p.name] = [float(raw[0]), float(raw[1])]
+        elif p.kind == ARRAY:
+            out[p.name] = [float(raw[i]) for i in range(p.length)]
         elif p.kind == VECTOR:
-            n = counts.get(p.name, counts.get("temperature_vector", 0))
+            n = int(_get_field(struct, p.count))
             out[p.name] = [float(raw[i]) for i in range(n)]
         elif p.kind == MATRIX:
-            rows = counts.get("temperature_vector", 0)
-            cols = counts.get("load_vector", 0)
+            rows = int(_get_field(struct, p.count))
+            cols = int(_get_field(struct, p.count2))
             out[p.name] = [[float(raw[i][j]) for j in range(cols)] for i in range(rows)]
     return out
 
@@ -747,11 +533,11 @@ def write_struct(specs: Sequence[Param], values: Mapping[str, Any], struct: Any)
             _set_field(struct, p.field, int(value))
         elif p.kind == OPTION:
             _set_field(struct, p.field, p.option_value(value))
-        elif p.kind in (VECTOR, PAIR):
+        elif p.kind in (VECTOR, ARRAY):
             arr = _get_field(struct, p.field)
             for i, v in enumerate(value):
                 arr[i] = v
-            if p.count:
+            if p.sets_count:
                 _set_field(struct, p.count, len(value))
         elif p.kind == MATRIX:
             arr = _get_field(struct, p.field)

@@ -13,6 +13,7 @@ field tables (include/gearsim/fields.h, read by gearsim._lib at import).
 from __future__ import annotations
 
 import math
+import os
 import struct
 import warnings
 from collections.abc import Iterator, Mapping
@@ -22,7 +23,9 @@ from typing import Any, ClassVar
 import numpy as np
 
 from . import params as P
+from ._extras import require
 from ._lib import INPUT_INFO, OUTPUT_INFO, REAL_SIZE, STATE_INFO, FieldInfo, check, ffi, lib
+from ._outputs import atomic_writer
 from .blocks import Block, RackPinion, SimpleGear
 from .errors import GearsimError, InputError, ParameterError, SubstepWarning, caller_stacklevel
 
@@ -112,6 +115,54 @@ class RigResult(tuple):
         """The outputs as an N x 15 array (columns in FIELDS order)."""
         return np.column_stack([np.atleast_1d(v) for v in tuple.__iter__(self)])
 
+    def _columns(self, time: Any) -> dict[str, np.ndarray]:
+        """The outputs as named 1-D columns, ``time`` (s) first when given."""
+        data = self.as_array()
+        columns: dict[str, np.ndarray] = {}
+        if time is not None:
+            t = np.asarray(time, dtype=float).reshape(-1)
+            if t.shape[0] != data.shape[0]:
+                raise ValueError(
+                    f"time has {t.shape[0]} values for {data.shape[0]} output samples"
+                )
+            columns["time"] = t
+        for i, name in enumerate(OUTPUT_NAMES):
+            columns[name] = data[:, i]
+        return columns
+
+    def to_csv(self, path: str | os.PathLike[str], time: Any = None) -> None:
+        """Writes the outputs to a CSV file: a header of the FIELDS names
+        (``time`` first when ``time``, in s, is given), one row per sample,
+        SI units as in the class docstring, every value with the 17 digits
+        that round-trip a double. The file is written atomically (a
+        temporary file renamed over ``path``)."""
+        columns = self._columns(time)
+        table = np.column_stack(list(columns.values()))
+        with atomic_writer(path, "w", encoding="utf-8", newline="") as fh:
+            fh.write(",".join(columns) + "\n")
+            np.savetxt(fh, table, fmt="%.17g", delimiter=",")
+
+    def to_dataframe(self, time: Any = None) -> Any:
+        """The outputs as a pandas DataFrame, one column per FIELDS name; with
+        ``time`` (s) it is the index, named ``time``. Needs pandas (the
+        ``analysis`` extra)."""
+        require("RigResult.to_dataframe", ["pandas"])
+        import pandas as pd
+
+        columns = self._columns(time)
+        frame = pd.DataFrame(columns)
+        return frame.set_index("time") if time is not None else frame
+
+    def to_parquet(self, path: str | os.PathLike[str], time: Any = None) -> None:
+        """Writes the outputs to a Parquet file (the columns of to_dataframe,
+        ``time`` as a column), atomically. Needs pandas and pyarrow."""
+        require("RigResult.to_parquet", ["pandas", "pyarrow"])
+        frame = self.to_dataframe(time)
+        if time is not None:
+            frame = frame.reset_index()
+        with atomic_writer(path, "wb") as fh:
+            frame.to_parquet(fh, index=False)
+
     def __getitem__(self, name: str) -> Any:  # type: ignore[override]
         if not isinstance(name, str) or name not in _OUT_COL:
             raise KeyError(name)
@@ -177,17 +228,10 @@ class Rig:
         dt: fixed step (s).
         temperature_input: when True, the losses use the measured_temperature
             input instead of the thermal state.
-        **rig_params: follower_inertia (gear) or rack_mass (rack),
-            load_coulomb_friction, load_coulomb_speed_threshold, load_offset,
-            thermal_resistance (None = adiabatic), ambient_temperature,
-            base_inertia, initial_base_speed, accel_filter_time_constant,
-            contact_substeps, base_drive ("speed" or "torque"),
-            load_breakaway_friction, load_stribeck_speed (Stribeck friction),
-            compliance_stiffness, compliance_damping (compliant base shaft),
-            ripple_revolution_amplitude, ripple_revolution_phase,
-            ripple_mesh_amplitude, ripple_mesh_phase (2 values each),
-            ripple_mesh_teeth (base-side torque ripple). SI numbers or unit
-            strings; missing ones take the defaults (Rig.defaults()).
+        **rig_params: the rig parameters (listed with their units in
+            help(GearRig) and help(RackRig), read from the C parameter
+            tables), SI numbers or unit strings; missing ones take the
+            defaults (Rig.defaults()).
     """
 
     def __init__(
@@ -204,7 +248,7 @@ class Rig:
             )
         kind = block.kind
         rig_specs = {p.name: p for p in P.BLOCKS[kind][1]}
-        dt_value = P.normalize(P.Param("dt", P.REAL, "s"), dt)
+        dt_value = P.normalize(P.RIG_ARGUMENT_PARAMS["dt"], dt)
         given = P.normalize_all(rig_specs, rig_params, f"{kind} rig")
         full = {**P.rig_defaults(kind), **given}
         c_params = ffi.new("gs_rig_params *")
@@ -226,7 +270,7 @@ class Rig:
         def value_of(name: str) -> Any:  # called by check() only on failure
             return {**block.params, **full, "dt": dt_value}[name]
 
-        check(status, err, rename=_c_rig_names(kind), value_of=value_of)
+        check(status, err, rename=P.c_rig_names(kind), value_of=value_of)
         info = ffi.new("gs_rig_info *")
         lib.gs_rig_get_info(consts, info)
         self._substeps = int(info.contact_substeps)
@@ -259,6 +303,7 @@ class Rig:
         # The constants are read-only after init (shared by copies); the state
         # is what a step changes (a snapshot is a copy of it).
         self._consts = consts
+        self._c_rig_params = c_params  # what init took: the HIL bridge changes parameters from it
         self._state = state
         self._stepper, self._step_out = _stepper(consts, state)
         self._ambient = float(full["ambient_temperature"])
@@ -643,19 +688,6 @@ def _finite(name: str, value: Any) -> float:
     return x
 
 
-def _c_rig_names(kind: str) -> dict[str, str]:
-    """C parameter names reported by gs_rig_init_* -> Python names, where they differ."""
-    driven = "follower_inertia" if kind == "simple_gear" else "rack_mass"
-    return {
-        "driven_inertia": driven,
-        "dt_s": "dt",
-        "base_inertia_kg_m2": "base_inertia",
-        "thermal_resistance_K_W": "thermal_resistance",
-        "accel_filter_time_constant_s": "accel_filter_time_constant",
-        "initial_base_speed_rad_s": "initial_base_speed",
-    }
-
-
 def _split(
     block_cls: type[Block], block: Any, params: dict[str, Any]
 ) -> tuple[Block, dict[str, Any]]:
@@ -714,3 +746,7 @@ class RackRig(Rig):
     ) -> None:
         block, rig_params = _split(RackPinion, rack, params)
         super().__init__(block, dt=dt, temperature_input=temperature_input, **rig_params)
+
+
+GearRig.__doc__ = f"{GearRig.__doc__}\n    Rig parameters:\n\n{P.describe(P.GEAR_RIG_PARAMS)}\n"
+RackRig.__doc__ = f"{RackRig.__doc__}\n    Rig parameters:\n\n{P.describe(P.RACK_RIG_PARAMS)}\n"

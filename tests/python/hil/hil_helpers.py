@@ -70,14 +70,30 @@ class Peer:
         return out
 
     def decoded(self, msgs: list[Any]) -> list[tuple[str, dict[str, float]]]:
+        """(frame name, role -> value) of each message, decoded by cantools:
+        a check of the bridge's C encoder that does not use it."""
         out = []
         for m in msgs:
             frame = self.dbc.by_key[(m.arbitration_id, bool(m.is_extended_id))]
-            out.append((frame.name, self.dbc.decode_feedback(frame, m.data)))
+            out.append((frame.name, roles_by_cantools(frame, m.data)))
         return out
 
     def close(self) -> None:
         self.bus.shutdown()
+
+
+def roles_by_cantools(frame: Any, data: bytes) -> dict[str, Any]:
+    """role -> value of a frame's role signals as cantools decodes them
+    (cmd.mode as the name of its value)."""
+    values = frame.message.decode(bytes(data), decode_choices=False)
+    out: dict[str, Any] = {}
+    for s in frame.signals:
+        if s.role == "cmd.mode":
+            name = (s.choices or {}).get(int(values[s.name]), "")
+            out[s.role] = name.strip().lower()
+        elif s.role:
+            out[s.role] = float(values[s.name])
+    return out
 
 
 def status_of(peer: Peer, msgs: list[Any]) -> dict[str, float]:
@@ -160,6 +176,7 @@ __all__ = [
     "rack_model",
     "status_of",
     "wrap_angle",
+    "roles_by_cantools",
     "next_channel",
     "record_session",
     "read_frames",

@@ -9,7 +9,17 @@ import math
 from typing import Any
 
 import pytest
-from hil_helpers import Bridge, Peer, RigDbc, can, gear_model, rack_model, status_of, wrap_angle
+from hil_helpers import (
+    Bridge,
+    Peer,
+    RigDbc,
+    can,
+    gear_model,
+    rack_model,
+    roles_by_cantools,
+    status_of,
+    wrap_angle,
+)
 
 from gearsim.hil import BridgeError, Counters
 
@@ -21,9 +31,9 @@ def _sum_classes(c: Counters, pending: int = 0) -> int:
 def _check_against_reference(
     bridge: Bridge, peer: Peer, model: Any, periods: int, profile: Any, mode: str
 ) -> dict[int, int]:
-    """Peer sends profile(k) every 10 periods; every feedback value must equal
-    the reference rig, stepped directly with the same (decoded) commands, to
-    within half a DBC step. Returns frames received per ID."""
+    """Peer sends profile(k) every 10 periods; every feedback value, decoded by
+    cantools, must equal the reference rig, stepped directly with the same
+    (decoded) commands, to within half a DBC step. Returns frames received per ID."""
     dbc = peer.dbc
     ref = model.rig(dt=bridge.dt)
     frame = next(iter(dbc.commands.values()))
@@ -33,7 +43,7 @@ def _check_against_reference(
     for k in range(periods):
         if k % 10 == 0:
             msgs = peer.command(t=k * bridge.period, mode=mode, **profile(k))
-            held = dbc.decode_command(frame, msgs[0].data)
+            held = roles_by_cantools(frame, msgs[0].data)
         bridge.tick()
         for _ in range(bridge.substeps):
             res = ref.step(load=held["cmd.load"], **{drive: held[f"cmd.{drive}"]})
@@ -43,7 +53,7 @@ def _check_against_reference(
         for msg in peer.drain():
             seen[msg.arbitration_id] = seen.get(msg.arbitration_id, 0) + 1
             fb = dbc.by_key[(msg.arbitration_id, False)]
-            values = dbc.decode_feedback(fb, msg.data)
+            values = roles_by_cantools(fb, msg.data)
             for s in fb.signals:
                 role = s.role
                 if not role.startswith(("out.", "in.")):
@@ -73,10 +83,10 @@ def test_gear_feedback_matches_the_rig_stepped_directly(
     bridge, peer = link
     seen = _check_against_reference(bridge, peer, gear, 600, _profile_speed, "speed")
     # feedback at the DBC cycle times: 10 ms and 100 ms frames over 600 periods of 1 ms
-    assert seen == {0x200: 60, 0x201: 60, 0x202: 6, 0x210: 6, 0x211: 6}
+    assert seen == {0x200: 60, 0x201: 60, 0x202: 6, 0x210: 6, 0x211: 6, 0x212: 6}
     c = bridge.counters
     assert c.rx_total == c.rx_used == 60 and c.timeouts == 0 and c.saturations == 0
-    assert c.tx_frames == 138 and c.periods == 600 and c.steps == 600
+    assert c.tx_frames == 144 and c.periods == 600 and c.steps == 600
 
 
 def test_rack_feedback_matches_with_substeps(channel: str, rack_dbc: RigDbc) -> None:
@@ -94,7 +104,7 @@ def test_rack_feedback_matches_with_substeps(channel: str, rack_dbc: RigDbc) -> 
             lambda k: {"base_speed": 25.0 * math.sin(k / 40.0), "load": 60.0 * math.cos(k / 25.0)},
             "speed",
         )
-        assert seen == {0x300: 60, 0x301: 60, 0x302: 6, 0x310: 6, 0x311: 6}
+        assert seen == {0x300: 60, 0x301: 60, 0x302: 6, 0x310: 6, 0x311: 6, 0x312: 6}
         assert bridge.counters.steps == 1200
     finally:
         peer.close()
@@ -220,7 +230,7 @@ def test_command_timeout_safe_state_and_recovery(link: tuple[Bridge, Peer]) -> N
     bridge, peer = link
     assert bridge.timeout_periods == 50
     bridge.tick()
-    assert bridge.state == {"cmd_timeout": True, "safe_state": True, "drive_disabled": False}
+    assert bridge.state == {"cmd_timeout": True, "safe_state": True, "drive_disabled": False, "fault_active": False}
     assert bridge.counters.timeouts == 0  # no command yet is not a timeout event
     states = {}
     for k in range(1, 400):
@@ -259,7 +269,7 @@ def test_disabled_mode_is_the_safe_state_without_timeout(link: tuple[Bridge, Pee
     assert bridge.inputs["base_speed"] == 8.0
     peer.command(base_speed=8.0, load=0.2, mode="disabled")
     bridge.tick()
-    assert bridge.state == {"cmd_timeout": False, "safe_state": True, "drive_disabled": True}
+    assert bridge.state == {"cmd_timeout": False, "safe_state": True, "drive_disabled": True, "fault_active": False}
     assert bridge.inputs == {"base_speed": 0.0, "base_torque": 0.0, "load": 0.0}
     assert bridge.counters.rx_used == 2 and bridge.counters.rx_rejected == 0
 
@@ -304,7 +314,7 @@ def test_send_failures_are_counted(gear: Any, gear_dbc: RigDbc) -> None:
     bridge.advance(200)
     assert bridge.counters.tx_errors == 2
     status = [
-        gear_dbc.decode_feedback(gear_dbc.by_key[(m.arbitration_id, False)], m.data)
+        roles_by_cantools(gear_dbc.by_key[(m.arbitration_id, False)], m.data)
         for m in sent
         if m.arbitration_id == 0x210
     ]
@@ -346,12 +356,21 @@ def test_setup_errors(gear: Any, gear_dbc: RigDbc, rack_dbc: RigDbc) -> None:
         Bridge.from_model(gear, gear_dbc).run(duration=0.01)
 
 
-def test_counter_fields_follow_the_one_list_of_status_counters():
-    # Counters spells its fields out (with their docs); the status frame's
-    # counter list in dbc_rules is the one source: same names, same order.
-    from dataclasses import fields
+def test_counters_are_the_c_bridges_own(gear: Any, gear_dbc: RigDbc) -> None:
+    """Counters reads the C bridge's counters by the names of gearsim/hil.h's
+    list (the one list, which the status frames use too): every name, in its
+    order, each the C count."""
+    from gearsim._lib import lib
+    from gearsim.hil.names import STATUS_COUNTS
 
-    from gearsim.hil.dbc_rules import STATUS_COUNTS
-
-    ints = [f.name for f in fields(Counters) if f.type in (int, "int")]
-    assert ints == [*STATUS_COUNTS, "steps"]
+    assert Counters.NAMES == (*STATUS_COUNTS, "steps")
+    assert STATUS_COUNTS[0] == "rx_total" and STATUS_COUNTS[-1] == "log_dropped"
+    bridge = Bridge.from_model(gear, gear_dbc, period=1e-3, substeps=3)
+    bridge.advance(250)
+    counts = bridge._b.counters.count
+    for i, name in enumerate(STATUS_COUNTS):
+        assert getattr(bridge.counters, name) == counts[i], name
+    assert bridge.counters.periods == counts[lib.GS_HIL_COUNT_PERIODS] == 250
+    assert bridge.counters.steps == 750
+    # 10 ms frames x 2 over 250 ms, 100 ms frames x 4 at 100 and 200 ms
+    assert bridge.counters.tx_frames == 2 * 25 + 4 * 2

@@ -182,8 +182,10 @@ def test_ctrl_c_stops_cleanly_and_prints_the_counters(files: dict[str, Path]) ->
         env=env,
     )
     try:
-        banner = proc.stderr.readline()
-        assert "Ctrl-C stops" in banner, banner + proc.stderr.read()
+        # -i virtual is said to be this process only, then the run starts
+        warning, banner = proc.stderr.readline(), proc.stderr.readline()
+        assert "warning: -i virtual is python-can's in-process bus" in warning, warning
+        assert "Ctrl-C stops" in banner, banner
         proc.send_signal(signal.SIGINT)
         out, err = proc.communicate(timeout=60)
     finally:
@@ -193,6 +195,39 @@ def test_ctrl_c_stops_cleanly_and_prints_the_counters(files: dict[str, Path]) ->
     assert proc.returncode == 0, err
     assert "rx_total" in out and "tx_frames" in out
     assert "Traceback" not in err
+
+
+def test_run_on_the_virtual_bus_says_it_is_this_process_only(
+    files: dict[str, Path], capsys: pytest.CaptureFixture
+) -> None:
+    """python-can's virtual bus joins the buses of one process: a host started
+    as another process (examples/hil/host.py) would send into nothing. The
+    run says so, and what to use instead, before it starts."""
+    capsys.readouterr()
+    argv = ["hil", "run", "--model", str(files["model"]), "-i", "virtual", "-c", "alone"]
+    assert main([*argv, "--duration", "0.005"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert err[0].startswith("gearsim hil run: warning: -i virtual is python-can's in-process")
+    assert "another process" in err[0] and "-i udp_multicast" in err[0]
+    assert "Ctrl-C stops" in err[1]
+
+
+def test_socketcan_that_does_not_open_says_why(
+    files: dict[str, Path], capsys: pytest.CaptureFixture
+) -> None:
+    """As the C runner does: this kernel has no AF_CAN (the hint names
+    modprobe and an interface that works without it); on a kernel with
+    SocketCAN the interface does not exist (the hint names ip link)."""
+    capsys.readouterr()
+    argv = ["hil", "run", "--model", str(files["model"]), "-i", "socketcan", "-c", "gsnone0"]
+    assert main([*argv, "--duration", "0.01"]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "cannot open CAN bus socketcan:gsnone0" in lines[0]
+    if _socketcan_unavailable() is not None:
+        assert "(this kernel has no AF_CAN; load it with modprobe can_raw" in lines[0]
+        assert "-i udp_multicast" in lines[0]
+    else:
+        assert "no such CAN interface; ip link show" in lines[0]
 
 
 def _socketcan_unavailable() -> str | None:

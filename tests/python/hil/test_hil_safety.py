@@ -197,7 +197,7 @@ def test_outputs_are_replaced_whole_and_leave_no_temporary_file(
     rc, _, err = _run(capsys, "hil", "replay", work["log"], "--model", work["model"], "-o", answers)
     assert rc == 0, err
     assert csv_path.read_text().splitlines()[1].startswith("time,base_speed,")
-    assert len(list(can.LogReader(str(answers)))) == 69
+    assert len(list(can.LogReader(str(answers)))) == 72
     assert sorted(p.name for p in d.iterdir()) == sorted(
         ["gear.toml", "rack.toml", "rec.blf", "data.csv", "answers.asc"]
     )
@@ -361,22 +361,22 @@ def test_a_long_pause_needs_max_gap_and_replays_in_bounded_chunks(
     work: dict[str, Path], capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     from gearsim.hil import bridge as bridge_mod
-    from gearsim.hil.replay import CHUNK_STEPS
+    from gearsim.hil.bridge import CHUNK_STEPS
 
     log = work["dir"] / "pause.log"
     _rewrite(work["log"], log, lambda i, t: t + (70.0 if i >= 50 else 0.0))
     rc, _, err = _run(capsys, "hil", "replay", log, "--model", work["model"])
     assert rc == 2
-    _one_error_line(err, "frame 51", "jumps forward by 70 s", "limit of 60 s")
+    _one_error_line(err, "frame 51", "jumps forward by 70", "limit of 60 s")
 
     calls: list[int] = []
-    original = bridge_mod.Bridge.advance
+    original = bridge_mod.Bridge._run_c
 
-    def spy(self: Any, periods: int = 1) -> None:
+    def spy(self: Any, periods: int) -> None:
         calls.append(periods)
         original(self, periods)
 
-    monkeypatch.setattr(bridge_mod.Bridge, "advance", spy)
+    monkeypatch.setattr(bridge_mod.Bridge, "_run_c", spy)
     rc, out, err = _run(
         capsys,
         "hil",
@@ -391,7 +391,8 @@ def test_a_long_pause_needs_max_gap_and_replays_in_bounded_chunks(
         "--json",
     )
     assert rc == 0, err
-    # 70 s at 1 ms x 4 sub-steps is 280 000 rig steps: never asked of the rig at once
+    # 70 s at 1 ms x 4 sub-steps is 280 000 rig steps: never one C call (Ctrl-C waits
+    # for the call to return)
     assert sum(calls) >= 70_000 and max(calls) * 4 <= CHUNK_STEPS
     # to-csv holds the last values across the pause, within the sample limit
     rc, out, err = _run(
@@ -492,7 +493,7 @@ def test_compressed_logs_work_for_to_csv_and_replay(
         assert rc == 0, err
         rc, out, err = _run(capsys, "hil", "replay", src, "--model", work["model"], "-o", answers)
         assert rc == 0, err
-        assert "replayed 99 frames, answered 69 frames" in out
+        assert "replayed 102 frames, answered 72 frames" in out
         results[src] = (csv_path.read_text(), answers.read_text())
     assert results[log] == results[plain]
 
@@ -514,7 +515,7 @@ def test_replay_writes_compressed_answers(
             (round(m.timestamp, 6), m.arbitration_id, bytes(m.data)) for m in can.LogReader(str(p))
         ]
 
-    assert frames(packed) == frames(plain) and len(frames(plain)) == 69
+    assert frames(packed) == frames(plain) and len(frames(plain)) == 72
     assert not [p for p in d.iterdir() if p.name.startswith(".")]
 
 
@@ -551,7 +552,7 @@ def test_replay_with_every_frame_rejected_fails(
     )
     assert rc == 2 and out == ""
     _one_error_line(
-        err, "all 99 frames were rejected", "rejected.unknown_id 99", "rack_pinion", "rack_rig.dbc"
+        err, "all 102 frames were rejected", "rejected.unknown_id 102", "rack_pinion", "rack_rig.dbc"
     )
     assert _snapshot(d) == before
 

@@ -107,23 +107,102 @@ def test_run_takes_the_bus_from_the_config_file(
 
 
 # -- the C runner --------------------------------------------------------------------
-def test_runner_c_when_not_available_says_how(
-    model_file: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
-) -> None:
-    try:
-        from gearsim.hil import runner
-    except ImportError:
-        runner = None
-    if runner is not None:
-        monkeypatch.setattr(runner, "find_runner", lambda *a, **k: None)
+def _fake_runner(path: Path, precision: str = "double") -> Path:
+    """An executable that answers --version as gearsim-hil does (locating a
+    runner runs nothing else)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(f'#!/bin/sh\necho "gearsim-hil 0.1.0 {precision}"\n')
+    path.chmod(0o755)
+    return path
+
+
+@pytest.fixture
+def no_runner_anywhere(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """No runner on PATH, in the environment or in a source tree; the working
+    directory is an empty folder (returned)."""
+    runner = pytest.importorskip("gearsim.hil.runner")
+    work = tmp_path / "work"
+    (work / "bin").mkdir(parents=True)
+    monkeypatch.setenv("PATH", str(work / "bin"))
+    monkeypatch.delenv(runner.RUNNER_ENV, raising=False)
+    monkeypatch.setattr(runner, "_source_tree", lambda: None)
+    monkeypatch.chdir(work)
+    return work
+
+
+def _runner_c(capsys: pytest.CaptureFixture, model: Path, *extra: str) -> tuple[int, str, str]:
     capsys.readouterr()
-    rc = main(["hil", "run", "--model", str(model_file), "--runner", "c", "-i", "candump"])
-    err = capsys.readouterr().err.strip().splitlines()
-    assert rc == 2 and len(err) == 1
-    if runner is not None:
-        assert "GEARSIM_BUILD_HIL=ON" in err[0] and "gearsim-hil" in err[0]
-    else:
-        assert "no C runner support" in err[0]
+    argv = ["hil", "run", "--model", str(model), "--runner", "c", "-i", "candump"]
+    rc = main([*argv, "--print-command", *extra])
+    cap = capsys.readouterr()
+    return rc, cap.out, cap.err
+
+
+def test_runner_c_when_not_available_says_how(
+    no_runner_anywhere: Path, model_file: Path, capsys: pytest.CaptureFixture
+) -> None:
+    rc, out, err = _runner_c(capsys, model_file)
+    lines = err.strip().splitlines()
+    assert rc == 2 and out == "" and len(lines) == 1
+    for needle in ("not built or installed", "cmake -S . -B build", "build/hil/gearsim-hil"):
+        assert needle in lines[0]
+    assert "--runner-path" in lines[0] and "GEARSIM_HIL_RUNNER" in lines[0]
+
+
+def test_runner_c_finds_the_documented_build_and_says_which(
+    no_runner_anywhere: Path,
+    model_file: Path,
+    capsys: pytest.CaptureFixture,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """--runner c takes, in order: --runner-path, $GEARSIM_HIL_RUNNER, the
+    installed gearsim-hil (PATH), the documented build build/hil/gearsim-hil
+    (of the source tree, or of the working directory); never a test build
+    such as build/test-double/hil; and says on stderr which it took."""
+    from gearsim.hil import runner
+
+    work = no_runner_anywhere
+    params = ["--runner-params", str(work / "m.hil-params")]
+    # a test build alone is not taken
+    _fake_runner(work / "build" / "test-double" / "hil" / "gearsim-hil")
+    rc, _, err = _runner_c(capsys, model_file, *params)
+    assert rc == 2 and "not built or installed" in err
+    # the documented build, in the working directory, then in the source tree
+    documented = _fake_runner(work / "build" / "hil" / "gearsim-hil")
+    rc, out, err = _runner_c(capsys, model_file, *params)
+    assert rc == 0 and out.split()[0] == str(documented)
+    assert f"C runner {documented} (built in the working directory (build/hil), double)" in err
+    tree = work / "tree"
+    built = _fake_runner(tree / "build" / "hil" / "gearsim-hil", precision="float")
+    monkeypatch.setattr(runner, "_source_tree", lambda: tree)
+    rc, out, err = _runner_c(capsys, model_file, *params)
+    assert rc == 0 and out.split()[0] == str(built)
+    assert "(built in the source tree (build/hil), float; float: its answers are not" in err
+    # installed, on PATH
+    installed = _fake_runner(work / "bin" / "gearsim-hil")
+    rc, out, err = _runner_c(capsys, model_file, *params)
+    assert rc == 0 and out.split()[0] == str(installed) and "(installed (on PATH), double)" in err
+    # the environment, then --runner-path
+    named = _fake_runner(work / "elsewhere" / "gearsim-hil")
+    monkeypatch.setenv(runner.RUNNER_ENV, str(named))
+    rc, out, err = _runner_c(capsys, model_file, *params)
+    assert rc == 0 and out.split()[0] == str(named) and "($GEARSIM_HIL_RUNNER, double)" in err
+    explicit = _fake_runner(work / "mine" / "gearsim-hil")
+    rc, out, err = _runner_c(capsys, model_file, *params, "--runner-path", str(explicit))
+    assert rc == 0 and out.split()[0] == str(explicit) and "(--runner-path, double)" in err
+    # a named runner that is not there is an error, not a fall-back
+    rc, out, err = _runner_c(capsys, model_file, *params, "--runner-path", str(work / "none"))
+    lines = err.strip().splitlines()
+    assert (
+        rc == 2
+        and len(lines) == 1
+        and "--runner-path" in lines[0]
+        and "not an executable" in lines[0]
+    )
+    # --runner-path belongs to --runner c
+    capsys.readouterr()
+    assert main(["hil", "run", "--model", str(model_file), "--runner-path", str(explicit)]) == 2
+    assert "--runner-path needs --runner c" in capsys.readouterr().err
 
 
 # -- rig time: run -> to-csv -> the same model ------------------------------------------
@@ -277,7 +356,7 @@ def test_compare_with_default_options_reproduces_the_rig(
 
 
 def test_live_run_records_in_rig_time_and_replays_to_its_answers(
-    tmp_path: Path, capsys: pytest.CaptureFixture
+    tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """`gearsim hil run --log` (paced by the wall clock, a host thread sending
     commands off the period grid) writes its log on the period grid, and
@@ -299,8 +378,18 @@ def test_live_run_records_in_rig_time_and_replays_to_its_answers(
                 k += 1
                 time.sleep(0.0037)
 
-    # the host's bus exists first: its first command (queued by the virtual bus
-    # for the bridge) is recorded at period 0, where a replay starts its periods
+    # A replay starts its periods at the log's first frame: the live run must
+    # find a command waiting at period 0. The host's bus exists first and sends
+    # every 3.7 ms; the bridge waits 10 ms between opening its bus and its first
+    # period, so that one of them is queued then (the virtual bus delivers only
+    # to buses that exist when a frame is sent).
+    original_run = Bridge.run
+
+    def run_after_a_command(self: Bridge, **kwargs: Any) -> Any:
+        time.sleep(0.01)
+        return original_run(self, **kwargs)
+
+    monkeypatch.setattr(Bridge, "run", run_after_a_command)
     thread = threading.Thread(target=host, daemon=True)
     thread.start()
     bus_ready.wait(5.0)
@@ -338,12 +427,11 @@ def test_live_run_records_in_rig_time_and_replays_to_its_answers(
 def test_runner_c_print_command_writes_the_params_and_the_command_line(
     tmp_path: Path, model_file: Path, capsys: pytest.CaptureFixture
 ) -> None:
-    runner = pytest.importorskip("gearsim.hil.runner")
-    exe = runner.find_runner()
-    if exe is None:
-        pytest.skip("the C runner gearsim-hil is not built")
+    pytest.importorskip("gearsim.hil.runner")
+    exe = _fake_runner(tmp_path / "bin" / "gearsim-hil")
     params = tmp_path / "rig.hil-params"
     argv = ["hil", "run", "--model", str(model_file), "--runner", "c", "--print-command"]
+    argv += ["--runner-path", str(exe)]
     capsys.readouterr()
     rc = main([*argv, "-i", "candump", "--period", "0.002", "--runner-params", str(params)])
     assert rc == 0

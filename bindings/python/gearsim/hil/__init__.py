@@ -16,6 +16,8 @@ encodes and decodes:
   decoding of commands, saturating encoding of feedback.
 - :class:`Bridge`: frame periods of ``substeps`` rig steps; held commands,
   command timeout and safe state, feedback at the DBC cycle times, counters.
+  Both run the C HIL library (hil/src, gearsim/hil.h) that the C runner
+  gearsim-hil runs: python-can is the transport, the semantics are C's.
 - :func:`replay`: a recorded log drives the model in log time; answers as a log.
 - :func:`log_to_measurement`: a log of commands and feedback as the canonical
   measurement CSV for ``gearsim compare|diagnose|fit``.
@@ -39,9 +41,9 @@ _EXPORTS: dict[str, str] = {
     "Counters": "bridge",
     "LoopStats": "bridge",
     "RigTimeRecorder": "bridge",
-    "REJECT_REASONS": "bridge",
-    "LATE_REASONS": "bridge",
-    "IGNORE_REASONS": "bridge",
+    "REJECT_REASONS": "names",
+    "LATE_REASONS": "names",
+    "IGNORE_REASONS": "names",
     "RigDbc": "codec",
     "DbcError": "codec",
     "FrameSpec": "codec",
@@ -58,6 +60,10 @@ _EXPORTS: dict[str, str] = {
     "INPUTS_SINCE": "recording",
     "RecordingError": "recording",
     "COLUMNS": "recording",
+    "Scenario": "scenario",
+    "ScenarioError": "scenario",
+    "tunable_parameters": "names",
+    "FAULTS": "names",
 }
 
 __all__ = list(_EXPORTS)

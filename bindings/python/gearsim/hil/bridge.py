@@ -1,5 +1,9 @@
 """The HIL bridge: a gearsim rig behind a CAN bus (docs/hil.md).
 
+The bridge's semantics are the C library's (gearsim/hil.h, hil/src): the
+same code as the C runner gearsim-hil, called through cffi. This module
+moves frames between python-can and that library, and paces it.
+
 Time model. The bridge works in *frame periods* of ``period = substeps * rig.dt``
 seconds. Period k covers simulated time [k*period, (k+1)*period):
 
@@ -27,18 +31,21 @@ from __future__ import annotations
 
 import copy
 import math
+import os
 import threading
 import time
 from array import array
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
 from typing import Any
 
 import can
 
+from .._lib import ffi, lib
 from ..errors import GearsimError
-from ..rig import INPUT_NAMES, OUTPUT_NAMES
-from .codec import FrameSpec, Rejection, RigDbc
+from ..rig import OUTPUT_NAMES
+from .codec import RigDbc
+from .names import IGNORE_REASONS, LATE_REASONS, REJECT_REASONS, STATE_FLAGS, STATUS_COUNTS
+from .scenario import Scenario, ScenarioError
 
 __all__ = [
     "Bridge",
@@ -46,19 +53,15 @@ __all__ = [
     "LoopStats",
     "RigTimeRecorder",
     "BridgeError",
+    "CHUNK_STEPS",
     "REJECT_REASONS",
     "LATE_REASONS",
     "IGNORE_REASONS",
 ]
 
-REJECT_REASONS = ("unknown_id", "bad_length", "undecodable", "out_of_range", "mode_mismatch")
-LATE_REASONS = ("superseded", "out_of_order", "after_stop")
-IGNORE_REASONS = ("feedback_id", "other_dbc_frame", "error_frame", "remote_frame")
-
-_TWO_PI = 2.0 * math.pi
-#: Spans of constant input at least this many rig steps long are run in C in
-#: one call (Rig.run_array, bit-identical to Rig.step); shorter ones call Rig.step.
-_BATCH_MIN_STEPS = 4
+#: One C call advances at most this many rig steps: Ctrl-C (seen between two
+#: Python bytecodes) stops even a replay across a long pause promptly.
+CHUNK_STEPS = 1 << 16
 
 
 class BridgeError(GearsimError, ValueError):
@@ -66,41 +69,49 @@ class BridgeError(GearsimError, ValueError):
     DBC that do not match, ...)."""
 
 
-@dataclass
 class Counters:
-    """What the bridge received, sent and did. ``reasons`` breaks rx_rejected,
-    rx_late and rx_ignored down ("rejected.unknown_id": 3, ...);
+    """What the bridge received, sent and did: a live view of the C bridge's
+    counters, one attribute per counter of gearsim/hil.h: ``rx_total``,
+    ``rx_used``, ``rx_rejected``, ``rx_late``, ``rx_ignored``, ``tx_frames``,
+    ``tx_errors``, ``timeouts`` (transitions into the command timeout after
+    commands had arrived), ``recoveries`` (out of it), ``overruns`` (paced
+    run: periods that started more than one period late), ``resyncs`` (paced
+    run: the schedule was moved because the loop fell too far behind),
+    ``saturations``, ``periods``, ``faults`` (values and frames an injected
+    fault changed), ``param_changes``, ``param_refused``, ``log_dropped``
+    (the C runner's recording); and ``steps``. ``reasons`` breaks
+    rx_rejected, rx_late and rx_ignored down ("rejected.unknown_id": 3, ...);
     ``saturated`` counts clamped values per feedback signal."""
 
-    rx_total: int = 0
-    rx_used: int = 0
-    rx_rejected: int = 0
-    rx_late: int = 0
-    rx_ignored: int = 0
-    tx_frames: int = 0
-    tx_errors: int = 0
-    timeouts: int = 0
-    """transitions into the command timeout after commands had arrived"""
-    recoveries: int = 0
-    """transitions out of the command timeout"""
-    overruns: int = 0
-    """paced run: periods that started more than one period late"""
-    resyncs: int = 0
-    """paced run: times the schedule was moved because the loop fell too far behind"""
-    saturations: int = 0
-    periods: int = 0
-    steps: int = 0
-    reasons: dict[str, int] = field(default_factory=dict)
-    saturated: dict[str, int] = field(default_factory=dict)
+    #: the counters, in the C order, then steps
+    NAMES: tuple[str, ...] = (*STATUS_COUNTS, "steps")
 
-    def count(self, cls: str, reason: str) -> None:
-        setattr(self, f"rx_{cls}", getattr(self, f"rx_{cls}") + 1)
-        key = f"{cls}.{reason}"
-        self.reasons[key] = self.reasons.get(key, 0) + 1
+    def __init__(self, c_counters: Any) -> None:
+        self._c = c_counters
+        self.saturated: dict[str, int] = {}
+
+    def __getattr__(self, name: str) -> int:
+        if name in STATUS_COUNTS:
+            return int(self._c.count[STATUS_COUNTS.index(name)])
+        raise AttributeError(name)
+
+    @property
+    def steps(self) -> int:
+        return int(self._c.steps)
+
+    @property
+    def reasons(self) -> dict[str, int]:
+        """ "class.reason" -> count, for the reasons that happened."""
+        out = {}
+        for i in range(1, lib.GS_HIL_REASONS):  # 0 is "pending", no class
+            n = int(self._c.reasons[i])
+            if n:
+                out[ffi.string(lib.gs_hil_reason_name(i)).decode()] = n
+        return dict(sorted(out.items()))
 
     def as_dict(self) -> dict[str, Any]:
-        d = {k: v for k, v in self.__dict__.items() if k not in ("reasons", "saturated")}
-        d["reasons"] = dict(sorted(self.reasons.items()))
+        d: dict[str, Any] = {name: getattr(self, name) for name in self.NAMES}
+        d["reasons"] = self.reasons
         d["saturated"] = dict(sorted(self.saturated.items()))
         return d
 
@@ -171,22 +182,34 @@ class RigTimeRecorder:
         self.listener(stamped)
 
 
+@ffi.def_extern()
+def gspy_hil_send(context: Any, frame: Any) -> int:
+    """gs_hil_config.send of every Bridge: the C bridge hands it each
+    feedback frame it sends."""
+    return ffi.from_handle(context)._sent(frame)
+
+
 class Bridge:
     """A rig that answers CAN commands with CAN feedback, period by period.
 
     Args:
-        rig: a gearsim.Rig (``model.rig(dt=period / substeps)``); stepped
-            with Rig.step / Rig.run.
+        rig: a gearsim.Rig (``model.rig(dt=period / substeps)``), stepped by
+            the C bridge in its own C state.
         dbc: a RigDbc, a DBC path, or None for the DBC shipped for the rig.
         bus: a python-can bus: poll() reads it, feedback is sent on it.
         send: where feedback goes instead of (or without) a bus: a callable
-            taking a can.Message (e.g. a can.Logger).
+            taking a can.Message (e.g. a can.Logger); a can.CanError it
+            raises counts as a transmit error.
         substeps: rig steps per frame period (>= 1).
         timeout: command timeout (s), rounded to whole frame periods (>= 1).
         stamp: simulated time (s) -> timestamp of a sent frame. None: the
             wall clock (time.time()), as a bus would stamp it.
         listeners: callables given every frame received and every frame sent
             (e.g. can.Logger for a recording).
+        scenario: a scenario file (docs/hil.md, "Scenarios"): its load
+            profile, faults, parameter changes and expectations, read and run
+            by the C library as the C runner does; junit() gives the verdict.
+            ScenarioError (exit 2) names the file, line and key of a bad one.
     """
 
     def __init__(
@@ -200,16 +223,23 @@ class Bridge:
         timeout: float = 0.1,
         stamp: Callable[[float], float] | None = None,
         listeners: Iterable[Callable[[can.Message], Any]] = (),
+        scenario: str | os.PathLike[str] | None = None,
     ) -> None:
         if not isinstance(substeps, int) or isinstance(substeps, bool) or substeps < 1:
             raise BridgeError(
                 f"substeps must be an integer >= 1, got {substeps!r}", parameter="substeps"
             )
+        if not (isinstance(timeout, (int, float)) and math.isfinite(timeout) and timeout > 0):
+            raise BridgeError(f"timeout must be a time > 0 s, got {timeout!r}", parameter="timeout")
         if not isinstance(dbc, RigDbc):
             dbc = RigDbc(dbc, block=rig.kind)
         if dbc.block is not None and dbc.block != rig.kind:
             raise BridgeError(
                 f"{dbc.path} is for {dbc.block}, the model is {rig.kind}", parameter="dbc"
+            )
+        if getattr(rig, "temperature_input", False):
+            raise BridgeError(
+                "the bridge steps rigs built with temperature_input=False", parameter="rig"
             )
         self.rig = rig
         self.dbc = dbc
@@ -217,80 +247,53 @@ class Bridge:
         self._send_fn = send if send is not None else (bus.send if bus is not None else None)
         self.substeps = substeps
         self.dt = float(rig.dt)
-        self.period = self.dt * substeps
         self.drive = rig.base_drive
-        driving = "cmd.base_speed" if self.drive == "speed" else "cmd.base_torque"
-        if driving not in dbc.command_signals:
-            raise BridgeError(
-                f"{dbc.path} has no command signal with GsRole {driving!r}, which a "
-                f"{self.drive}-driven rig needs",
-                parameter="dbc",
-            )
-        self._driving = driving
-        if not (isinstance(timeout, (int, float)) and math.isfinite(timeout) and timeout > 0):
-            raise BridgeError(f"timeout must be a time > 0 s, got {timeout!r}", parameter="timeout")
-        self.timeout_periods = max(1, round(timeout / self.period))
-        self.timeout = self.timeout_periods * self.period
-        self._cycles: list[tuple[FrameSpec, int]] = []
-        for frame in dbc.feedback:
-            n = frame.cycle_time / self.period
-            if abs(n - round(n)) > 1e-6 * max(1.0, n) or round(n) < 1:
-                raise BridgeError(
-                    f"feedback frame {frame.name}: cycle time {frame.cycle_time * 1e3:g} ms is "
-                    f"not a whole number of frame periods ({self.period * 1e3:g} ms)",
-                    parameter="period",
-                )
-            self._cycles.append((frame, int(round(n))))
-        names = {
-            s.role[4:]
-            for f in dbc.feedback
-            for s in f.signals
-            if s.role and s.role.startswith("out.")
-        }
-        if "follower_angle" in names:
-            names.discard("follower_angle")
-            names.add("follower_position")
-        if getattr(rig, "temperature_input", False):
-            raise BridgeError(
-                "the bridge steps rigs built with temperature_input=False", parameter="rig"
-            )
-        out_names = list(OUTPUT_NAMES)
-        self._out_fields = [(n, out_names.index(n)) for n in sorted(names)]
-        self._batch: Any = None
-        if hasattr(rig, "run_array"):
-            import numpy as np
-
-            in_names = list(INPUT_NAMES)
-            self._batch = (
-                np.empty((64, len(in_names))),
-                np.empty((64, len(out_names))),
-                {n: i for i, n in enumerate(in_names)},
-            )
         self._stamp = stamp
         self._listeners = list(listeners)
-        self.counters = Counters()
-        self._pending: dict[tuple[int, bool], tuple[dict[str, Any], float]] = {}
-        self._held: dict[tuple[int, bool], dict[str, Any]] = {}
-        self._held_ts: dict[tuple[int, bool], float] = {}
-        self._last_rx: dict[tuple[int, bool], int] = {}
-        self._timed_out = True
-        self._ever_commanded = False
-        self._status_seq: dict[tuple[int, bool], int] = {}
-        self._latched_at: dict[tuple[int, bool], tuple[int, ...]] = {}
-        self.state: dict[str, Any] = {
-            "cmd_timeout": True,
-            "safe_state": True,
-            "drive_disabled": False,
-        }
-        self.inputs: dict[str, float] = {"base_speed": 0.0, "base_torque": 0.0, "load": 0.0}
-        self.last_output: dict[str, float] = {}
         self._closed = False
-        self._dirty = True
-        self._stale_at = 0
-        self._due_gcd = 0
-        for _, cyc in self._cycles:
-            self._due_gcd = math.gcd(self._due_gcd, cyc)
-        self._cycle_list = [cyc for _, cyc in self._cycles]
+        self._error: BaseException | None = None
+        self._wall = (math.nan, 0.0)  # (simulated time, its wall-clock stamp)
+        self._handle = ffi.new_handle(self)
+        self._b = self._init_c(float(timeout))
+        self.counters = Counters(self._b.counters)
+        self._rx = ffi.new("gs_hil_frame *")
+        self.scenario: Scenario | None = None
+        if scenario is not None:
+            self._attach(scenario)
+
+    def _init_c(self, timeout: float) -> Any:
+        """The C bridge around the rig's C constants and state."""
+        rig = self.rig
+        block = lib.GS_RIG_SIMPLE_GEAR if rig.kind == "simple_gear" else lib.GS_RIG_RACK_PINION
+        # the DBC's table, for the rig's block when the DBC names none (checked above)
+        self._table = ffi.new("gs_hil_dbc *", self.dbc.table.dbc[0])
+        self._table.block = block
+        config = ffi.new("gs_hil_config *")
+        config.dbc = self._table
+        speed = rig.base_drive == "speed"
+        config.base_drive = lib.GS_BASE_SPEED_DRIVEN if speed else lib.GS_BASE_TORQUE_DRIVEN
+        config.dt_s = rig.dt
+        config.substeps = self.substeps
+        config.timeout_s = timeout
+        config.ambient_temperature_K = rig.ambient_temperature
+        config.stamp_origin_s = 0.0
+        config.send = lib.gspy_hil_send
+        config.send_context = self._handle
+        # parameter changes at run time start from the parameters the rig was built with
+        if rig.kind == "simple_gear":
+            config.gear_params = rig.block._c_params
+        else:
+            config.rack_params = rig.block._c_params
+        config.rig_params = rig._c_rig_params
+        b = ffi.new("gs_hil_bridge *")
+        err = ffi.new("gs_hil_error *")
+        if lib.gs_hil_bridge_init(b, config, block, rig._consts, rig._state, err) != lib.GS_HIL_OK:
+            parameter = ffi.string(err.parameter).decode() if err.parameter != ffi.NULL else None
+            message = ffi.string(err.message).decode("utf-8", "replace")
+            if parameter == "dbc":
+                message = f"{self.dbc.path}: {message}"
+            raise BridgeError(message, parameter=parameter)
+        return b
 
     @classmethod
     def from_model(
@@ -311,7 +314,22 @@ class Bridge:
             )
         return cls(model.rig(dt=period / substeps), dbc, substeps=substeps, **kwargs)
 
-    # -- time --------------------------------------------------------------------
+    # -- time and state ----------------------------------------------------------
+    @property
+    def period(self) -> float:
+        """The frame period (s): substeps rig steps."""
+        return float(self._b.period_s)
+
+    @property
+    def timeout_periods(self) -> int:
+        """The command timeout in whole frame periods."""
+        return int(self._b.timeout_periods)
+
+    @property
+    def timeout(self) -> float:
+        """The command timeout (s), a whole number of periods."""
+        return self.timeout_periods * self.period
+
     @property
     def periods(self) -> int:
         """Frame periods completed."""
@@ -325,52 +343,97 @@ class Bridge:
     @property
     def pending(self) -> int:
         """Valid commands received and not yet applied (0 or 1 per command frame)."""
-        return len(self._pending)
+        return int(lib.gs_hil_pending(self._b))
+
+    @property
+    def state(self) -> dict[str, bool]:
+        """The state flags of the last period: cmd_timeout, safe_state, drive_disabled."""
+        return {name: bool(self._b.flag_state[i]) for i, name in enumerate(STATE_FLAGS)}
+
+    @property
+    def inputs(self) -> dict[str, float]:
+        """The inputs the rig is stepped with (after the safe-state logic)."""
+        i = self._b.input
+        return {"base_speed": i.base_speed, "base_torque": i.base_torque, "load": i.load}
+
+    @property
+    def last_output(self) -> dict[str, float]:
+        """The rig's outputs after the last step."""
+        out = self._b.output
+        return {name: getattr(out, name) for name in OUTPUT_NAMES}
 
     # -- receiving ---------------------------------------------------------------
     def handle(self, msg: can.Message) -> str:
         """Classify one received frame; a valid command becomes pending (the
         next period applies it). Returns the class: "pending",
-        "rejected.<reason>" or "ignored.<reason>"."""
-        c = self.counters
-        c.rx_total += 1
+        "rejected.<reason>", "late.<reason>" or "ignored.<reason>"."""
         for listener in self._listeners:
             listener(msg)
-        if msg.is_error_frame:
-            return self._count("ignored", "error_frame")
-        if msg.is_remote_frame:
-            return self._count("ignored", "remote_frame")
-        key = (msg.arbitration_id, bool(msg.is_extended_id))
-        frame = self.dbc.commands.get(key)
-        if frame is None:
-            if key in self.dbc.feedback_keys:
-                return self._count("ignored", "feedback_id")
-            if key in self.dbc.other_keys:
-                return self._count("ignored", "other_dbc_frame")
-            return self._count("rejected", "unknown_id")
-        values = self.dbc.decode_command(frame, msg.data)
-        if isinstance(values, Rejection):
-            return self._count("rejected", values.reason)
-        mode = values.get("cmd.mode")
-        if mode is not None and mode not in ("disabled", self.drive):
-            return self._count("rejected", "mode_mismatch")
-        ts = float(msg.timestamp)
-        held_ts = self._held_ts.get(key)
-        pend = self._pending.get(key)
-        if (held_ts is not None and ts < held_ts) or (pend is not None and ts < pend[1]):
-            return self._count("late", "out_of_order")
-        if pend is not None:
-            self._count("late", "superseded")
-        self._pending[key] = (values, ts)
-        return "pending"
+        f = self._rx
+        data = bytes(msg.data or b"")
+        n = min(len(data), lib.GS_HIL_MAX_DATA)
+        f.timestamp_s = float(msg.timestamp)
+        f.id = msg.arbitration_id
+        f.is_extended = bool(msg.is_extended_id)
+        f.is_remote = bool(msg.is_remote_frame)
+        f.is_error = bool(msg.is_error_frame)
+        f.length = len(data)  # longer than classic CAN: counted as bad_length
+        ffi.memmove(f.data, data, n)
+        return ffi.string(lib.gs_hil_reason_name(lib.gs_hil_handle(self._b, f))).decode()
+
+    def request_param(self, name: str, value: float) -> str:
+        """Ask for a rig parameter change ("key", "key[i]" or "key[i][j]" of
+        a tunable parameter; gearsim.hil.names.tunable_parameters) as a
+        parameter frame would: it takes effect one period after the current
+        one (docs/hil.md, "Parameters at run time"). Returns "pending", or
+        the refusal (counted): "unknown_param", "bad_element", "busy", ..."""
+        from .names import PARAM_RESULTS, parse_parameter
+
+        try:
+            index, element = parse_parameter(self.rig.kind, name)
+        except ValueError as exc:
+            raise BridgeError(str(exc), parameter="param") from None
+        result = lib.gs_hil_request_param(self._b, index, element, float(value))
+        return "pending" if result == lib.GS_HIL_PARAM_APPLIED else PARAM_RESULTS[result]
+
+    @property
+    def rig_params(self) -> Any:
+        """The C parameters in use (gs_hil_rig_params: .block.gear or
+        .block.rack, and .rig), after the changes that took effect."""
+        return lib.gs_hil_params(self._b)
+
+    # -- scenario -----------------------------------------------------------------
+    def _attach(self, path: str | os.PathLike[str]) -> None:
+        scenario = Scenario(path, self._table, self.rig.kind)
+        err = ffi.new("gs_hil_error *")
+        if lib.gs_hil_attach_scenario(self._b, scenario._c, err) != lib.GS_HIL_OK:
+            raise ScenarioError(ffi.string(err.message).decode("utf-8", "replace"), parameter="scenario")
+        self.scenario = scenario  # the C bridge points into it: kept alive here
+
+    @property
+    def scenario_end(self) -> int:
+        """The period count at which the scenario has run its duration (0 without one)."""
+        return int(lib.gs_hil_scenario_end(self._b))
+
+    def verdict(self) -> dict[str, int]:
+        """Expectations passed, failed (an open window counts as failed once
+        the bridge is closed) and still pending."""
+        passed, failed, pending = (ffi.new("unsigned *") for _ in range(3))
+        lib.gs_hil_verdict_counts(self._b, passed, failed, pending)
+        return {"passed": int(passed[0]), "failed": int(failed[0]), "pending": int(pending[0])}
+
+    def junit(self) -> str:
+        """The scenario's verdict as JUnit XML (the C library's text: the same
+        bytes as gearsim-hil --junit for the same frames). Call after close()
+        for the final verdict."""
+        n = lib.gs_hil_junit(self._b, ffi.NULL, 0)
+        buf = ffi.new("char[]", n + 1)
+        lib.gs_hil_junit(self._b, buf, n + 1)
+        return ffi.string(buf).decode("utf-8", "replace")
 
     def add_listener(self, listener: Callable[[can.Message], Any]) -> None:
         """Give ``listener`` every frame received and sent from now on."""
         self._listeners.append(listener)
-
-    def _count(self, cls: str, reason: str) -> str:
-        self.counters.count(cls, reason)
-        return f"{cls}.{reason}"
 
     def poll(self) -> int:
         """Handle every frame waiting on the bus (never blocks). Returns how many."""
@@ -398,213 +461,80 @@ class Bridge:
         if self._closed:
             raise BridgeError("the bridge is closed")
         remaining = int(periods)
+        chunk = max(1, CHUNK_STEPS // self.substeps)
         while remaining > 0:
-            if self._pending:
-                self._apply_pending()
-            now = self.counters.periods
-            if self._dirty or (not self._timed_out and now >= self._stale_at):
-                self._update_state()
-            span = remaining
-            if not self._timed_out:
-                # inputs stay constant until the timeout would fire
-                span = min(span, self._stale_at - now)
-            span = max(1, span)
-            self._run_span(span)
-            remaining -= span
+            n = min(remaining, chunk)
+            self._run_c(n)
+            remaining -= n
 
-    def _apply_pending(self) -> None:
-        if not self._pending:
-            return
-        now = self.counters.periods
-        for key, (values, ts) in self._pending.items():
-            self._held[key] = values
-            self._held_ts[key] = ts
-            self._last_rx[key] = now
-            self.counters.rx_used += 1
-        self._pending.clear()
-        self._ever_commanded = True
-        self._dirty = True
+    def _run_c(self, periods: int) -> None:
+        """One call of gs_hil_advance; then the exception a send raised, if any."""
+        lib.gs_hil_advance(self._b, periods)
+        if self._error is not None:
+            error, self._error = self._error, None
+            raise error
 
-    def _update_state(self) -> None:
-        now = self.counters.periods
-        stale = any(
-            key not in self._last_rx or now - self._last_rx[key] > self.timeout_periods
-            for key in self.dbc.commands
-        )
-        if stale and not self._timed_out and self._ever_commanded:
-            self.counters.timeouts += 1
-        elif not stale and self._timed_out and self.counters.timeouts > self.counters.recoveries:
-            self.counters.recoveries += 1
-        self._timed_out = stale
-        self._dirty = False
-        if not stale:
-            # first period at which the oldest command frame is stale
-            self._stale_at = min(self._last_rx.values()) + self.timeout_periods + 1
-        held: dict[str, Any] = {}
-        for values in self._held.values():
-            held.update(values)
-        disabled = not stale and held.get("cmd.mode", self.drive) == "disabled"
-        safe = stale or disabled
-        self.state = {"cmd_timeout": stale, "safe_state": safe, "drive_disabled": disabled}
-        if safe:
-            self.inputs = {"base_speed": 0.0, "base_torque": 0.0, "load": 0.0}
-        elif self.drive == "speed":
-            self.inputs = {
-                "base_speed": held["cmd.base_speed"],
-                "base_torque": 0.0,
-                "load": held.get("cmd.load", 0.0),
-            }
-        else:
-            self.inputs = {
-                "base_speed": 0.0,
-                "base_torque": held["cmd.base_torque"],
-                "load": held.get("cmd.load", 0.0),
-            }
+    def advance_to(self, t: float) -> None:
+        """Run the periods up to the first period boundary at or after
+        simulated time ``t`` (within 1 us), where a replay handles a frame
+        ``t`` seconds after the log's first one (gs_hil_period_at)."""
+        target = int(lib.gs_hil_period_at(self._b, t))
+        if target > self.periods:
+            self.advance(target - self.periods)
 
-    def _run_span(self, span: int) -> None:
-        """span periods with the current inputs; feedback at the due ones."""
-        c = self.counters
-        inp = self.inputs
-        n_steps = span * self.substeps
-        fields = self._out_fields
-        if n_steps >= _BATCH_MIN_STEPS and self._batch is not None:
-            out = self._run_batch(n_steps)
-            start = c.periods
-            for j in range(span):
-                c.periods = start + j + 1
-                c.steps += self.substeps
-                if self._due(c.periods):
-                    row = out[(j + 1) * self.substeps - 1]
-                    self.last_output = {f: float(row[col]) for f, col in fields}
-                    self._emit()
-            if not self._due(c.periods):
-                row = out[n_steps - 1]
-                self.last_output = {f: float(row[col]) for f, col in fields}
-            return
-        rig = self.rig
-        driving = (
-            {"base_speed": inp["base_speed"]}
-            if self.drive == "speed"
-            else {"base_torque": inp["base_torque"]}
-        )
-        substeps = self.substeps
-        load = inp["load"]
-        res = None
-        for _ in range(span):
-            for _ in range(substeps):
-                res = rig.step(load=load, **driving)
-            c.steps += substeps
-            c.periods += 1
-            if self._due(c.periods):
-                self.last_output = {f: getattr(res, f) for f, _ in fields}
-                self._emit()
-                res = None
-        if res is not None:
-            self.last_output = {f: getattr(res, f) for f, _ in fields}
+    def period_at(self, t: float) -> int:
+        """The period boundary at which a replay handles a frame t seconds
+        after the log's first (gs_hil_period_at)."""
+        return int(lib.gs_hil_period_at(self._b, t))
 
-    def _run_batch(self, n: int) -> Any:
-        """n rig steps with the current inputs in one C call (Rig.run_array,
-        bit-identical to n Rig.step calls); returns the n x 15 outputs."""
-        import numpy as np
-
-        buf_in, buf_out, cols = self._batch
-        if len(buf_in) < n:
-            size = max(n, 2 * len(buf_in))
-            buf_in = np.empty((size, buf_in.shape[1]))
-            buf_out = np.empty((size, buf_out.shape[1]))
-            self._batch = (buf_in, buf_out, cols)
-        arr = buf_in[:n]
-        ambient = self.rig.ambient_temperature
-        arr[:, cols["base_speed"]] = self.inputs["base_speed"]
-        arr[:, cols["base_torque"]] = self.inputs["base_torque"]
-        arr[:, cols["load"]] = self.inputs["load"]
-        arr[:, cols["ambient_temperature"]] = ambient
-        arr[:, cols["measured_temperature"]] = ambient
-        return self.rig.run_array(arr, buf_out[:n])
-
-    def _due(self, n: int) -> bool:
-        if not self._due_gcd or n % self._due_gcd:
-            return False
-        for cyc in self._cycle_list:
-            if n % cyc == 0:
-                return True
-        return False
+    def periods_in(self, seconds: float) -> int:
+        """Whole frame periods in ``seconds`` (rounded half to even)."""
+        return int(lib.gs_hil_periods_in(self._b, seconds))
 
     # -- sending ------------------------------------------------------------------
-    _LATCHED = ("rx_rejected", "rx_late", "saturations", "overruns", "tx_errors")
-    _LATCH_FLAGS = ("cmd_rejected", "cmd_late", "fb_saturated", "overrun", "tx_error")
-
-    def _emit(self) -> None:
-        c = self.counters
-        n = c.periods
-        stamp = self._stamp(n * self.period) if self._stamp is not None else time.time()
-        for frame, cyc in self._cycles:
-            if n % cyc:
-                continue
-            values = self._frame_values(frame)
-            data, saturated = self.dbc.encode_feedback(frame, values)
-            for name in saturated:
-                key = f"{frame.name}.{name}"
-                c.saturated[key] = c.saturated.get(key, 0) + 1
-            c.saturations += len(saturated)
+    def _sent(self, frame: Any) -> int:
+        """A feedback frame from the C bridge: onto the bus (or ``send``) and
+        to the listeners. Returns 0, or 1 for a transmit error. Any other
+        exception is kept and raised when the C call returns."""
+        if self._error is not None:
+            return 1
+        try:
+            if frame.saturated:
+                self._count_saturated(frame)
             msg = can.Message(
-                timestamp=stamp,
-                arbitration_id=frame.frame_id,
-                is_extended_id=frame.is_extended,
-                data=data,
+                timestamp=self._stamp_of(frame.timestamp_s),
+                arbitration_id=frame.id,
+                is_extended_id=bool(frame.is_extended),
+                data=bytes(ffi.buffer(frame.data, frame.length)),
                 is_rx=False,
             )
-            self._send(msg)
+            if self._send_fn is not None:
+                try:
+                    self._send_fn(msg)
+                except can.CanError:
+                    return 1
+            for listener in self._listeners:
+                listener(msg)
+            return 0
+        except BaseException as exc:  # raised after the C call, not lost in cffi
+            self._error = exc
+            return 1
 
-    def _frame_values(self, frame: FrameSpec) -> dict[str, Any]:
-        out = self.last_output
-        c = self.counters
-        values: dict[str, Any] = {}
-        latched = None
-        for s in frame.signals:
-            role = s.role
-            if role is None:
-                continue
-            group, _, name = role.partition(".")
-            if group == "out":
-                if name == "follower_angle":
-                    values[role] = math.fmod(out["follower_position"], _TWO_PI) % _TWO_PI
-                else:
-                    values[role] = out[name]
-            elif group == "in":
-                values[role] = self.inputs[name]
-            elif role == "status.counter":
-                seq = self._status_seq.get(frame.key, 0)
-                values[role] = seq
-                self._status_seq[frame.key] = seq + 1
-            elif group == "status":
-                kind, _, what = name.partition(".")
-                if kind == "count":
-                    values[role] = getattr(c, what)
-                elif what in self.state:
-                    values[role] = self.state[what]
-                else:
-                    if latched is None:
-                        now = tuple(getattr(c, a) for a in self._LATCHED)
-                        before = self._latched_at.get(frame.key, (0,) * len(now))
-                        latched = {
-                            f: a > b for f, a, b in zip(self._LATCH_FLAGS, now, before, strict=True)
-                        }
-                        self._latched_at[frame.key] = now
-                    values[role] = latched[what]
-        return values
+    def _count_saturated(self, frame: Any) -> None:
+        """Per signal, the values the C bridge clamped (frame.saturated)."""
+        spec = self.dbc.by_key[(frame.id, bool(frame.is_extended))]
+        saturated = self.counters.saturated
+        for s in spec.signals:
+            if frame.saturated >> s.index & 1:
+                key = f"{spec.name}.{s.name}"
+                saturated[key] = saturated.get(key, 0) + 1
 
-    def _send(self, msg: can.Message) -> None:
-        c = self.counters
-        if self._send_fn is not None:
-            try:
-                self._send_fn(msg)
-            except can.CanError:
-                c.tx_errors += 1
-                return
-        c.tx_frames += 1
-        for listener in self._listeners:
-            listener(msg)
+    def _stamp_of(self, simulated: float) -> float:
+        if self._stamp is not None:
+            return self._stamp(simulated)
+        if self._wall[0] != simulated:  # one wall-clock stamp for the frames of a period
+            self._wall = (simulated, time.time())
+        return self._wall[1]
 
     # -- paced loop ------------------------------------------------------------------
     def run(
@@ -627,6 +557,8 @@ class Bridge:
         and is never skipped. Returns the LoopStats (also when stopped)."""
         if self.bus is None:
             raise BridgeError("run() needs a bus")
+        if duration is None and self.scenario is not None:
+            duration = self.scenario.duration  # a scenario runs its duration
         stats = stats if stats is not None else LoopStats(self.period)
         should_stop: Callable[[], bool]
         if stop is None:
@@ -643,6 +575,7 @@ class Bridge:
         clock = time.perf_counter
         period = self.period
         bus = self.bus
+        counts = self._b.counters.count
         deadline = clock()
         while not should_stop() and (end is None or self.counters.periods < end):
             while True:
@@ -660,9 +593,9 @@ class Bridge:
             stats.record(now, deadline)
             late = now - deadline
             if late > period:
-                self.counters.overruns += 1
+                counts[lib.GS_HIL_COUNT_OVERRUNS] += 1
             if late > max_lag:
-                self.counters.resyncs += 1
+                counts[lib.GS_HIL_COUNT_RESYNCS] += 1
                 deadline = now
             self.poll()
             self.advance(1)
@@ -674,21 +607,23 @@ class Bridge:
         """Stop: commands still pending never reach a step and count as late
         (after_stop). Returns summary(). Does not shut the bus down."""
         if not self._closed:
-            for _ in self._pending:
-                self.counters.count("late", "after_stop")
-            self._pending.clear()
+            lib.gs_hil_close(self._b)
+            lib.gs_hil_finish_scenario(self._b)
             self._closed = True
         return self.summary()
 
     def summary(self) -> dict[str, Any]:
         """Counters, simulated time and state, as plain data (JSON-ready)."""
         d = self.counters.as_dict()
-        d["pending"] = len(self._pending)
+        d["pending"] = self.pending
         d["simulated_time"] = self.time
         d["period"] = self.period
         d["substeps"] = self.substeps
         d["timeout"] = self.timeout
         d["state"] = dict(self.state)
+        if self.scenario is not None:
+            v = self.verdict()
+            d["verdict"] = {"passed": v["passed"], "failed": v["failed"] + v["pending"]}
         return d
 
     def __enter__(self) -> Bridge:

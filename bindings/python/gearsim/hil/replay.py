@@ -1,11 +1,13 @@
 """Replay a recorded CAN log through the bridge, in log time (docs/hil.md).
 
 The log (any format python-can's LogReader reads: .asc, .blf, .csv, .log,
-.trc, .mf4, ..., and the text formats compressed with gzip: .asc.gz, .log.gz,
-.csv.gz, .trc.gz) is read in file order. A frame at log time t (seconds after
-the first frame) is handled at the first period boundary k*period >= t (within
-1 us, the rounding of log formats), so it acts on period k; between frames the
-bridge advances without sleeping, as fast as the machine allows. The answers
+.trc, .mf4, ..., and the formats it reads compressed with gzip: .asc.gz,
+.log.gz, .csv.gz, .trc.gz, .blf.gz) is read in file order. A frame at log
+time t (seconds after the first frame) is handled at the first period
+boundary k*period >= t (within 1 us, the rounding of log formats; the C
+library's rule, gs_hil_advance_to, which the C runner's replay follows too),
+so it acts on period k; between frames the bridge advances without sleeping,
+as fast as the machine allows. The answers
 (feedback frames) are stamped with the log's time base (first frame time +
 simulated time) and written with python-can's Logger. The same log, model and
 options give the same answers, frame for frame.
@@ -20,8 +22,9 @@ Safety:
   jump (a log mixing absolute and relative timestamps, a clock step) is
   refused with a :class:`LogError` naming the frame, instead of simulating
   the jump period by period; non-finite timestamps are refused the same way;
-- the bridge advances in chunks of at most :data:`CHUNK_STEPS` rig steps, so
-  memory does not grow with the time between two frames;
+- the bridge advances in C calls of at most :data:`CHUNK_STEPS` rig steps,
+  so that Ctrl-C stops even a replay across a long pause promptly; memory
+  does not grow with the time between two frames;
 - a log that cannot be read (corrupt, truncated, wrong format) raises a
   :class:`LogError` naming the file and the frame.
 """
@@ -41,10 +44,16 @@ from pathlib import PurePath
 from typing import Any
 
 import can
+from can.io.generic import (
+    BinaryIOMessageReader,
+    BinaryIOMessageWriter,
+    TextIOMessageReader,
+    TextIOMessageWriter,
+)
 
-from .._outputs import check_output, file_mode, printable
+from .._outputs import atomic_write_text, check_output, file_mode, printable
 from ..errors import InputError
-from .bridge import Bridge
+from .bridge import CHUNK_STEPS, Bridge
 from .codec import RigDbc
 
 __all__ = [
@@ -61,17 +70,9 @@ __all__ = [
     "CHUNK_STEPS",
 ]
 
-#: A frame up to this long after a period boundary counts as at the boundary
-#: (absorbs the rounding of log formats and of epoch timestamps), in seconds.
-_SLACK = 1e-6
-
 #: Largest time jump (s) allowed between two consecutive frames of a log, by
 #: default (``--max-gap``).
 DEFAULT_MAX_GAP = 60.0
-
-#: The bridge is advanced by at most this many rig steps at a time (bounds the
-#: buffers of Rig.run_array, whatever the time between two frames).
-CHUNK_STEPS = 1 << 16
 
 
 class LogError(InputError):
@@ -122,57 +123,41 @@ class TimeCheck:
         return t
 
 
-def _reader_class(suffix: str) -> type:
-    from can.io import player
-
-    with contextlib.suppress(Exception):
-        player._update_reader_plugins()  # type: ignore[attr-defined]
-    cls = player.MESSAGE_READERS.get(suffix)
-    if cls is None:
-        known = ", ".join(sorted(player.MESSAGE_READERS))
-        raise LogError(f"no read support for log format {printable(suffix)!s} (known: {known})")
-    return cls
-
-
 def _open_reader(path: str) -> Any:
-    """A python-can reader for ``path``: the format from its suffix; a
-    ``.gz`` suffix means the format before it, compressed with gzip (any
-    number of other dots in the name)."""
-    from can.io.generic import BinaryIOMessageReader, TextIOMessageReader
-
+    """A python-can reader for ``path`` (can.LogReader: the format from the
+    suffix, ``.gz`` for the format before it compressed with gzip). A
+    compressed log with further dots in its name (``bench.run.1.asc.gz``),
+    which can.LogReader does not take, is opened with the reader that
+    python-can lists for the suffix before ``.gz``."""
     shown = printable(path)
     suffixes = [s.lower() for s in PurePath(path).suffixes]
     if not suffixes:
         raise LogError(f"{shown}: no suffix naming the log format (.asc, .blf, .log, ...)")
     fh: Any = None
     try:
-        if suffixes[-1] == ".gz":
-            if len(suffixes) < 2:
-                raise LogError(f"{shown}: .gz without the format before it (.asc.gz, .log.gz, ...)")
-            cls = _reader_class(suffixes[-2])
-            if issubclass(cls, TextIOMessageReader):
-                fh = gzip.open(path, "rt")
-            elif issubclass(cls, BinaryIOMessageReader):
-                fh = gzip.open(path, "rb")
-            else:
-                raise LogError(
-                    f"{shown}: {printable(suffixes[-2])} logs cannot be read compressed with gzip"
-                )
+        if suffixes[-1] == ".gz" and len(suffixes) > 2:
+            cls = can.io.MESSAGE_READERS.get(suffixes[-2])
+            if cls is None or not issubclass(cls, (TextIOMessageReader, BinaryIOMessageReader)):
+                raise LogError(f"no read support for log format {printable(suffixes[-2])}")
+            fh = gzip.open(path, "rt" if issubclass(cls, TextIOMessageReader) else "rb")
             return cls(fh)
-        cls = _reader_class(suffixes[-1])
-        return cls(file=path)
+        return can.LogReader(path)
     except LogError as exc:
         if fh is not None:
             fh.close()
-        if exc.detail.startswith(shown):
-            raise
         raise LogError(f"{shown}: {exc.detail}") from None
-    except Exception as exc:  # python-can raises many kinds on a bad file
+    except Exception as exc:  # python-can raises many kinds on a bad file or name
         if fh is not None:
             with contextlib.suppress(Exception):
                 fh.close()
         if isinstance(exc, MemoryError):
             raise
+        if isinstance(exc, ValueError) and "No read support" in str(exc):
+            known = ", ".join(sorted(can.io.MESSAGE_READERS))
+            raise LogError(
+                f"{shown}: no read support for this log format (known: {known}; "
+                ".gz for the compressed text logs and .blf)"
+            ) from None
         raise LogError(
             f"{shown}: not a readable {printable(suffixes[-1])} log: {type(exc).__name__}: "
             f"{printable(' '.join(str(exc).split()))}"
@@ -235,22 +220,18 @@ def log_writer_format(path: str | PathLike[str], option: str = "--out") -> str:
     """The python-can log format ``path`` would be written in (".asc",
     ".blf", ..., or ".asc.gz" for a compressed text log); a LogError when
     python-can cannot write it."""
-    from can.io import logger
-    from can.io.generic import BinaryIOMessageWriter, TextIOMessageWriter
-
-    with contextlib.suppress(Exception):
-        logger._update_writer_plugins()  # type: ignore[attr-defined]
+    writers = can.io.MESSAGE_WRITERS
     target = os.fspath(path)
     shown = printable(target)
     suffixes = [s.lower() for s in PurePath(target).suffixes]
-    known = ", ".join(sorted(logger.MESSAGE_WRITERS))
+    known = ", ".join(sorted(writers))
     if not suffixes or target == "-":
         raise LogError(
             f"{option} {shown}: no suffix naming the log format ({known}; .gz for text logs)"
         )
     if suffixes[-1] == ".gz":
         real = suffixes[-2] if len(suffixes) >= 2 else ""
-        cls = logger.MESSAGE_WRITERS.get(real)
+        cls = writers.get(real)
         if (
             cls is None
             or real in (".blf", ".db")
@@ -260,7 +241,7 @@ def log_writer_format(path: str | PathLike[str], option: str = "--out") -> str:
                 f"{option} {shown}: python-can cannot write {printable(real or '.gz')} compressed"
             )
         return real + ".gz"
-    if suffixes[-1] not in logger.MESSAGE_WRITERS:
+    if suffixes[-1] not in writers:
         raise LogError(
             f"{option} {shown}: no write support for {printable(suffixes[-1])} logs ({known})"
         )
@@ -348,6 +329,8 @@ class ReplayResult:
     frames_out: int
     wall_time: float
     """seconds the replay took"""
+    junit: str | None = None
+    """the scenario's verdict as JUnit XML (None without a scenario)"""
 
     @property
     def frames_per_second(self) -> float:
@@ -367,16 +350,6 @@ class ReplayResult:
 def _check_tail(tail: Any) -> None:
     if not (isinstance(tail, (int, float)) and math.isfinite(tail) and tail >= 0):
         raise LogError(f"tail must be a time >= 0 s, got {tail!r}", parameter="tail")
-
-
-def _advance(bridge: Bridge, periods: int) -> None:
-    """bridge.advance(periods) in chunks of at most CHUNK_STEPS rig steps
-    (the same frames as one call: batched and single periods are identical)."""
-    chunk = max(1, CHUNK_STEPS // bridge.substeps)
-    while periods > 0:
-        n = min(periods, chunk)
-        bridge.advance(n)
-        periods -= n
 
 
 def replay_messages(
@@ -401,21 +374,23 @@ def replay_messages(
     (``name`` names the log). Returns the number of messages."""
     _check_tail(tail)
     check = TimeCheck(max_gap, name)
-    period = bridge.period
     n = 0
+    end = bridge.scenario_end
     for msg in messages:
         ts = check(msg.timestamp)
         if origin is None:
             origin = ts
-        t = ts - origin
-        k = math.ceil((t - _SLACK) / period)
-        if k > bridge.periods:
-            _advance(bridge, k - bridge.periods)
+        if end and bridge.period_at(ts - origin) > end:
+            break  # after the scenario's end: the run it describes is over
+        bridge.advance_to(ts - origin)
         if on_input is not None:
             on_input(msg)
         bridge.handle(msg)
         n += 1
-    _advance(bridge, 1 + max(0, round(tail / period)))
+    if not end:
+        bridge.advance(1 + bridge.periods_in(tail))  # the last command acts, then the tail
+    elif end > bridge.periods:
+        bridge.advance(end - bridge.periods)  # a scenario: its duration, as a live run
     return n
 
 
@@ -449,6 +424,8 @@ def replay(
     on_answer: Callable[[can.Message], Any] | None = None,
     max_gap: float | None = DEFAULT_MAX_GAP,
     require_used: bool = False,
+    scenario: str | PathLike[str] | None = None,
+    junit: str | PathLike[str] | None = None,
 ) -> ReplayResult:
     """Replay ``log`` through a fresh rig of ``model`` (a gearsim.Model) and
     write the answers to ``out`` (python-can Logger; format from the suffix)
@@ -462,10 +439,15 @@ def replay(
     python-can writes) and is written atomically: on any failure the previous
     file (or none) is left in place. ``max_gap``: see :func:`replay_messages`.
     ``require_used``: raise a LogError (and write nothing) when no frame of
-    the log was a command the model used (a log of another rig, ...)."""
+    the log was a command the model used (a log of another rig, ...).
+    ``scenario``: a scenario file run on the replay (the C runner's rule:
+    the replay goes on to the scenario's end); ``junit``: where its verdict
+    goes (atomically), which is then also ``ReplayResult.junit``."""
     if out is not None:
-        check_output(out, [log, dbc if not isinstance(dbc, RigDbc) else None], option="--out")
+        check_output(out, [log, dbc if not isinstance(dbc, RigDbc) else None, scenario], option="--out")
         log_writer_format(out)
+    if junit is not None:
+        check_output(junit, [log, scenario, out], option="--junit")
     TimeCheck(max_gap)  # validates max_gap before any work
     _check_tail(tail)
     reader = read_log(log)
@@ -496,6 +478,7 @@ def replay(
             timeout=timeout,
             send=answer,
             stamp=lambda t: (origin[0] if origin else 0.0) + t,
+            scenario=scenario,
         )
         writer = AtomicLogWriter(out) if out is not None else None
         on_input = writer.on_message_received if (with_input and writer is not None) else None
@@ -508,6 +491,9 @@ def replay(
             raise LogError(_nothing_used(reader.name, n, summary, bridge))
         if writer is not None:
             writer.commit()
+        verdict = bridge.junit() if bridge.scenario is not None else None
+        if junit is not None and verdict is not None:
+            atomic_write_text(junit, verdict)
         wall = time.perf_counter() - start
     except BaseException:
         if writer is not None:
@@ -515,4 +501,4 @@ def replay(
         raise
     finally:
         reader.stop()
-    return ReplayResult(summary, n, frames_out, wall)
+    return ReplayResult(summary, n, frames_out, wall, verdict)

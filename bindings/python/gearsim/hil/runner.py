@@ -3,7 +3,8 @@
 - :func:`params_text` / :func:`write_params`: the runner's parameter file from a
   gearsim model (the C parameter structs the Python rig is built from, field
   by field, so that the C runner and ``Bridge`` step the same rig);
-- :func:`find_runner`: the built executable;
+- :func:`locate_runner`: the executable to start, and where it was found;
+  :func:`find_runner`: the same, in a given precision;
 - :func:`live_command`, :func:`replay_command`, :func:`launch`: command lines
   and a started process, with the Python bridge's defaults (period 1 ms,
   1 sub-step, timeout 0.1 s).
@@ -15,6 +16,7 @@ import os
 import shutil
 import subprocess
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +30,8 @@ __all__ = [
     "RUNNER_ENV",
     "params_text",
     "write_params",
+    "RunnerChoice",
+    "locate_runner",
     "find_runner",
     "runner_precision",
     "live_command",
@@ -35,9 +39,19 @@ __all__ = [
     "launch",
 ]
 
-#: Environment variable naming the runner executable (takes precedence).
+#: Environment variable naming the runner executable (after --runner-path).
 RUNNER_ENV = "GEARSIM_HIL_RUNNER"
 RUNNER_NAME = "gearsim-hil"
+#: Where the build docs/hil-runner.md gives (cmake -S . -B build) puts the
+#: runner, in the source tree.
+DOCUMENTED_BUILD = Path("build") / "hil" / RUNNER_NAME
+#: How to get one, for the message when there is none.
+HOW_TO_BUILD = (
+    "build it from the source tree with CMake (on by default on Linux): cmake -S . -B build "
+    f"&& cmake --build build --target {RUNNER_NAME}, which makes {DOCUMENTED_BUILD}; or "
+    f"install it (cmake --install build); or name it with --runner-path or {RUNNER_ENV} "
+    "(docs/hil-runner.md)"
+)
 
 
 class RunnerError(GearsimError, ValueError):
@@ -102,13 +116,65 @@ def write_params(model: Any, path: str | os.PathLike[str]) -> Path:
     return Path(path)
 
 
-def _source_tree_candidates() -> list[Path]:
-    """Runners built in this source tree (build/*/hil/gearsim-hil), newest first."""
+@dataclass(frozen=True)
+class RunnerChoice:
+    """A runner executable and where it was found."""
+
+    path: Path
+    how: str
+    """where: --runner-path, $GEARSIM_HIL_RUNNER, installed (on PATH), built in
+    the source tree (build/hil), or built in the working directory (build/hil)"""
+
+
+def _source_tree() -> Path | None:
+    """The source tree this package runs from (an editable install), or None."""
     root = Path(__file__).resolve().parents[4]
-    if not (root / "hil" / "CMakeLists.txt").is_file():
-        return []
-    found = [p for p in (root / "build").glob(f"*/hil/{RUNNER_NAME}") if os.access(p, os.X_OK)]
-    return sorted(found, key=lambda p: p.stat().st_mtime, reverse=True)
+    return root if (root / "hil" / "CMakeLists.txt").is_file() else None
+
+
+def _candidates(explicit: str | os.PathLike[str] | None) -> list[tuple[Path, str, bool]]:
+    """(path, how, named): where a runner is looked for, in order. A named one
+    (--runner-path, the environment) must be there; the others may not."""
+    out: list[tuple[Path, str, bool]] = []
+    if explicit is not None:
+        out.append((Path(explicit), "--runner-path", True))
+    env = os.environ.get(RUNNER_ENV)
+    if env:
+        out.append((Path(env), f"${RUNNER_ENV}", True))
+    on_path = shutil.which(RUNNER_NAME)
+    if on_path:
+        out.append((Path(on_path), "installed (on PATH)", False))
+    root = _source_tree()
+    if root is not None:
+        out.append((root / DOCUMENTED_BUILD, "built in the source tree (build/hil)", False))
+    cwd = Path.cwd() / DOCUMENTED_BUILD
+    if root is None or cwd.resolve() != (root / DOCUMENTED_BUILD).resolve():
+        out.append((cwd, "built in the working directory (build/hil)", False))
+    return out
+
+
+def _executable(path: Path) -> bool:
+    return path.is_file() and os.access(path, os.X_OK)
+
+
+def locate_runner(explicit: str | os.PathLike[str] | None = None) -> RunnerChoice:
+    """The runner ``gearsim hil run --runner c`` starts: ``explicit``
+    (--runner-path), else $GEARSIM_HIL_RUNNER, else ``gearsim-hil`` on PATH
+    (an installed runner), else the documented CMake build, build/hil/gearsim-hil,
+    of this package's source tree or of the working directory. Other build
+    folders (the test builds, build/*/hil) are never picked. RunnerError
+    when a named one is not an executable file, or none is found."""
+    tried = []
+    for path, how, named in _candidates(explicit):
+        if _executable(path):
+            return RunnerChoice(path, how)
+        if named:
+            raise RunnerError(f"{how} {path}: not an executable file")
+        tried.append(str(path))
+    raise RunnerError(
+        f"the C runner {RUNNER_NAME} is not built or installed (looked on PATH and at "
+        f"{', '.join(tried) or 'nothing'}): {HOW_TO_BUILD}"
+    )
 
 
 def runner_precision(path: str | os.PathLike[str]) -> str | None:
@@ -125,31 +191,18 @@ def runner_precision(path: str | os.PathLike[str]) -> str | None:
 
 
 def find_runner(precision: str | None = "double") -> Path | None:
-    """The gearsim-hil executable: $GEARSIM_HIL_RUNNER, else gearsim-hil on
-    PATH, else the newest one built in this source tree (build/*/hil/) in
-    the given precision ("double", the Python bindings' precision, whose
-    answers are bit-identical to the Python bridge's; "float"; None: any).
-    None when there is none."""
-    env = os.environ.get(RUNNER_ENV)
-    if env:
-        return Path(env) if os.access(env, os.X_OK) else None
-    on_path = shutil.which(RUNNER_NAME)
-    candidates = ([Path(on_path)] if on_path else []) + _source_tree_candidates()
-    for path in candidates:
-        if precision is None or runner_precision(path) == precision:
+    """The first runner locate_runner() would consider (--runner-path
+    aside) that runs in the given precision ("double", the Python bindings'
+    precision, whose answers are bit-identical to the Python bridge's;
+    "float"; None: any). None when there is none."""
+    for path, _, _ in _candidates(None):
+        if _executable(path) and (precision is None or runner_precision(path) == precision):
             return path
     return None
 
 
 def _runner_or_fail(runner: str | os.PathLike[str] | None) -> str:
-    path = runner if runner is not None else find_runner()
-    if path is None:
-        raise RunnerError(
-            f"the C runner {RUNNER_NAME} is not built: build it with CMake "
-            f"(cmake -S . -B build && cmake --build build --target {RUNNER_NAME}; "
-            f"docs/hil-runner.md) or set {RUNNER_ENV}"
-        )
-    return os.fspath(path)
+    return os.fspath(runner if runner is not None else locate_runner().path)
 
 
 def _command_head(
@@ -184,6 +237,7 @@ def live_command(
     rx: str = "-",
     tx: str = "-",
     channel: str = "can0",
+    listen: str = "127.0.0.1:29536",
     duration: float | None = None,
     spin_us: int | None = None,
     fifo: int | None = None,
@@ -197,6 +251,8 @@ def live_command(
     cmd += ["--transport", transport]
     if transport == "socketcan":
         cmd += ["--channel", channel]
+    elif transport == "socketcand":
+        cmd += ["--listen", listen, "--channel", channel]
     else:
         cmd += ["--rx", rx, "--tx", tx]
     if duration is not None:

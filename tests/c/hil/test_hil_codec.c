@@ -1,8 +1,8 @@
 /*
- * The library part of the C HIL runner (gearsim/hil.h): the codec's range
- * checks and saturation on the shipped gear DBC, with bytes worked out by
- * hand from the DBC (Intel order, two's complement), and the bridge's fault
- * classes, timeout and safe state.
+ * The C HIL library (gearsim/hil.h) on the shipped gear DBC: the codec's
+ * range checks and saturation, with bytes worked out by hand from the DBC
+ * (Intel order, two's complement), the bridge's fault classes, timeout and
+ * safe state, feedback cycles and status, and the replay timing rule.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -14,6 +14,7 @@
 #include <cmocka.h>
 
 #include "gearsim/hil.h"
+#include "gearsim/hil_dbc.h"
 
 #define GEAR_CMD 0u /* GearCmd is the first frame of gear_rig.dbc */
 
@@ -50,6 +51,7 @@ static void test_decode_rejections(void **unused)
     /* 0x7FFFFF * 0.001 = 8388.607 rad/s, outside [-1000, 1000]: rejected, not wrapped */
     const uint8_t too_fast[8] = {0xFF, 0xFF, 0x7F, 0, 0, 0, 0, 0x01};
     assert_int_equal(gs_hil_decode_command(cmd_frame, too_fast, 8, &cmd), GS_HIL_REJECTED_OUT_OF_RANGE);
+    assert_int_equal(cmd.signal, 0); /* BaseSpeedCmd decided it */
     /* 1000.001 rad/s = raw 1000001 = 0x0F4241: just outside */
     const uint8_t just_outside[8] = {0x41, 0x42, 0x0F, 0, 0, 0, 0, 0x01};
     assert_int_equal(gs_hil_decode_command(cmd_frame, just_outside, 8, &cmd), GS_HIL_REJECTED_OUT_OF_RANGE);
@@ -59,7 +61,9 @@ static void test_decode_rejections(void **unused)
     /* DriveMode 3 has no name in the value table */
     const uint8_t mode3[8] = {0, 0, 0, 0, 0, 0, 0, 0x03};
     assert_int_equal(gs_hil_decode_command(cmd_frame, mode3, 8, &cmd), GS_HIL_REJECTED_UNDECODABLE);
+    assert_int_equal(cmd.signal, 3); /* DriveMode */
     assert_int_equal(gs_hil_decode_command(cmd_frame, mode3, 4, &cmd), GS_HIL_REJECTED_BAD_LENGTH);
+    assert_int_equal(cmd.signal, -1);
 }
 
 static void test_encode_saturates_and_rounds(void **unused)
@@ -80,7 +84,7 @@ static void test_encode_saturates_and_rounds(void **unused)
     assert_int_equal(data[2], 0x7F);
     assert_float_equal(gs_hil_signal_value(torque, data), 838.8607, 1e-9);
     /* NaN: the value in range nearest 0 */
-    assert_int_equal(gs_hil_put_value(torque, NAN, data), 1);
+    assert_int_equal(gs_hil_put_value(torque, (double)NAN, data), 1);
     assert_int_equal(data[0] | data[1] | data[2], 0);
 }
 
@@ -90,6 +94,7 @@ typedef struct {
     unsigned sent;
     uint32_t last_id;
     uint8_t last_data[8];
+    uint8_t counters_data[8]; /* the last GearCounters frame */
 } sink;
 
 static int capture(void *context, const gs_hil_frame *frame)
@@ -98,6 +103,9 @@ static int capture(void *context, const gs_hil_frame *frame)
     s->sent++;
     s->last_id = frame->id;
     memcpy(s->last_data, frame->data, 8);
+    if (frame->id == 0x211u) {
+        memcpy(s->counters_data, frame->data, 8);
+    }
     return 0;
 }
 
@@ -208,12 +216,40 @@ static void test_feedback_cycles_and_status(void **unused)
     init_gear_bridge(0.1);
     gs_hil_advance(&bridge, 10); /* 10 ms: GearFbBase and GearFbFollower */
     assert_int_equal(out.sent, 2);
-    gs_hil_advance(&bridge, 90); /* 100 ms: 10 x 2 + thermal, status, counters */
-    assert_int_equal(out.sent, 23);
-    assert_int_equal(out.last_id, 0x211);
+    gs_hil_advance(&bridge, 90); /* 100 ms: 10 x 2 + thermal, status, counters, faults */
+    assert_int_equal(out.sent, 24);
+    assert_int_equal(out.last_id, 0x212);
     /* GearCounters: TxFrames (16|16) counts the 22 frames sent before it */
-    assert_int_equal(out.last_data[2] | (out.last_data[3] << 8), 22);
-    assert_int_equal(bridge.counters.count[GS_HIL_COUNT_TX_FRAMES], 23);
+    assert_int_equal(out.counters_data[2] | (out.counters_data[3] << 8), 22);
+    /* GearFaults: no fault, no parameter change, nothing dropped */
+    for (unsigned k = 0; k < 8; ++k) {
+        assert_int_equal(out.last_data[k], 0);
+    }
+    assert_int_equal(bridge.counters.count[GS_HIL_COUNT_TX_FRAMES], 24);
+}
+
+/* Replay in log time: a frame t after the log's first is handled at the
+ * first period boundary at or after t, within 1 us. Times are multiples of
+ * the bridge's own period (1 ms as gs_real: 0.0010000000474974513 s in the
+ * float build), which (m * p) / p gives back exactly for these m. */
+static void test_replay_timing(void **unused)
+{
+    (void)unused;
+    init_gear_bridge(0.1);
+    const double p = bridge.period_s;
+    assert_int_equal(gs_hil_period_at(&bridge, 0.0), 0);
+    assert_int_equal(gs_hil_period_at(&bridge, 0.5 * p), 1);
+    assert_int_equal(gs_hil_period_at(&bridge, p), 1);
+    assert_int_equal(gs_hil_period_at(&bridge, p + 0.9e-6), 1); /* within the slack */
+    assert_int_equal(gs_hil_period_at(&bridge, p + 1.1e-6), 2);
+    assert_int_equal(gs_hil_period_at(&bridge, -5.0), 0);
+    gs_hil_advance_to(&bridge, 2.5 * p);
+    assert_int_equal(bridge.counters.count[GS_HIL_COUNT_PERIODS], 3);
+    gs_hil_advance_to(&bridge, p); /* passed: nothing */
+    assert_int_equal(bridge.counters.count[GS_HIL_COUNT_PERIODS], 3);
+    assert_int_equal(gs_hil_periods_in(&bridge, 2.5 * p), 2); /* half to even */
+    assert_int_equal(gs_hil_periods_in(&bridge, 3.5 * p), 4);
+    assert_int_equal(gs_hil_periods_in(&bridge, -1.0), 0);
 }
 
 int main(void)
@@ -225,6 +261,7 @@ int main(void)
         cmocka_unit_test(test_fault_classes),
         cmocka_unit_test(test_timeout_safe_state_and_recovery),
         cmocka_unit_test(test_feedback_cycles_and_status),
+        cmocka_unit_test(test_replay_timing),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
