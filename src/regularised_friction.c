@@ -10,7 +10,11 @@
  * spring. Written as c(v)*v with the secant c(v) = F*tanh(4 v/v_th)/v taken
  * at the start speed, the friction is a linear damper over the step: backward
  * Euler keeps it stable for any step and passive (it only opposes the end
- * speed), and in steady sliding it is the smooth law exactly. */
+ * speed), and in steady sliding it is the smooth law exactly. This is the
+ * rigid mesh's form (the geared solve, where the damper joins the driven
+ * side's implicit viscous term); with backlash the rig takes the law's value
+ * at the start speed as a friction bound solved jointly with the contact
+ * (src/rig.c, creep_level). */
 #include "regularised_friction.h"
 #include "gs_math.h"
 
@@ -30,9 +34,4 @@ gs_real gs_creep_damping(gs_real level, gs_real w, gs_real inv_threshold)
 {
     const gs_real k = GS_R(4.0) * inv_threshold;
     return level * k * tanh_over_x(k * w);
-}
-
-gs_real gs_creep_torque(gs_real c, gs_real momentum, gs_real inertia_sub, gs_real h)
-{
-    return -c * momentum / (inertia_sub + h * c);
 }

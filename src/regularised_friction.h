@@ -1,7 +1,7 @@
 /* regularised_friction.h - the driven side's regularised friction
  * (physics.md 11): the smooth law F(v)*tanh(4 v/v_th) on a driven side that
  * moves freely, as a damper whose coefficient is taken at the start speed of
- * each (sub-)step and acts on its end speed. */
+ * each step and acts on its end speed (rigid mesh). */
 #ifndef GS_REGULARISED_FRICTION_H
 #define GS_REGULARISED_FRICTION_H
 
@@ -11,12 +11,5 @@
  * at the speed w (rad/s or m/s): the secant of the smooth law through rest,
  * 4 F/v_th at w = 0. level: F >= 0; inv_threshold: 1/v_th > 0. */
 gs_real gs_creep_damping(gs_real level, gs_real w, gs_real inv_threshold);
-
-/* The friction torque (N*m or N) of the damper c over a sub-step h on a
- * driven side with momentum = J*w + h*(every other torque) and
- * inertia_sub = J + h*mu (mu its viscous coefficient): -c times the end
- * speed the damper leaves, momentum/(inertia_sub + h*c). Backward Euler on
- * a damper: it opposes that speed and never reverses it. */
-gs_real gs_creep_torque(gs_real c, gs_real momentum, gs_real inertia_sub, gs_real h);
 
 #endif /* GS_REGULARISED_FRICTION_H */

@@ -502,6 +502,13 @@ static inline gs_real friction_level(const rig_consts_ *r, gs_real w_f)
 /* sum_i a_i*cos(i*x) - b_i*sin(i*x), i.e. sum_i A_i*cos(i*x + phi_i) (N*m).
  * The multiples come from the Chebyshev recurrence cos((i+1)x) = 2 cos x
  * cos(ix) - cos((i-1)x) (and the same for sin): one cos/sin pair per angle. */
+/* The regularised friction's magnitude at the driven speed w_f: the smooth
+ * law F(v)*|tanh(4 v/v_th)| of the speed-driven rigid rig. */
+static gs_real creep_level(const rig_consts_ *r, gs_real w_f)
+{
+    return friction_level(r, w_f) * gs_abs(gs_tanh(GS_R(4.0) * w_f * r->inv_load_speed_threshold));
+}
+
 static gs_real harmonics(const gs_real *a, const gs_real *b, gs_real angle)
 {
     gs_real c1;
@@ -965,8 +972,14 @@ static substep_end substep_friction(const rig_consts_ *r, const gs_mesh_friction
             *t_f = t_f0 - mesh_bwd;
         }
     }
-    /* regularised: the load's friction acted before the contact (backlash_step) */
-    const gs_real level = r->friction_regularised ? GS_R(0.0) : friction_level(r, w_f);
+    /* Regularised, the load's friction bound is the smooth law at the
+     * sub-step's start speed, F(v)*|tanh(4 v/v_th)|: zero at rest, so the
+     * driven side creeps instead of sticking, and, solved jointly with the
+     * contact like the Coulomb bound, it never reverses the motion. (A
+     * damper applied before the contact, then the contact, created energy
+     * where the contact turned the follower within the sub-step: fuzz
+     * finding.) */
+    const gs_real level = r->friction_regularised ? creep_level(r, w_f) : friction_level(r, w_f);
     const gs_real fwd = mesh_fwd < GS_R(0.0) ? mesh_fwd : mesh_fwd + level;
     const gs_real bwd = mesh_bwd < GS_R(0.0) ? mesh_bwd : mesh_bwd + level;
     gs_real friction = GS_R(0.0);
@@ -1005,8 +1018,7 @@ static void backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
     const gs_real h = r->substep;
     const int speed_driven = r->base_drive == GS_BASE_SPEED_DRIVEN;
     /* no friction on the follower at all: every sub-step is one contact solve */
-    const int free_follower =
-        !law->lossy && (r->friction_regularised || (!r->stribeck && !(r->load_coulomb > GS_R(0.0))));
+    const int free_follower = !law->lossy && !r->stribeck && !(r->load_coulomb > GS_R(0.0));
     /* the 2-D table reads its efficiency at the last sub-step's base load */
     const int law_per_substep = m->friction == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY;
     const gs_real w_b_start = st->base_speed;
@@ -1036,11 +1048,7 @@ static void backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
         } else {
             w_b_free = (r->base_inertia * w_b + motor_h) * r->inv_base_inertia_sub;
         }
-        gs_real momentum = r->driven_inertia * w_f + push_h;
-        if (r->friction_regularised) { /* a damper on the free motion, before the contact */
-            const gs_real creep = gs_creep_damping(friction_level(r, w_f), w_f, r->inv_load_speed_threshold);
-            momentum += h * gs_creep_torque(creep, momentum, r->driven_inertia + h * m->mu_follower, h);
-        }
+        const gs_real momentum = r->driven_inertia * w_f + push_h;
         substep_end e;
         gs_real tau_mesh = GS_R(0.0);
         if (free_follower) {
