@@ -509,6 +509,32 @@ static gs_real creep_level(const rig_consts_ *r, gs_real w_f)
     return friction_level(r, w_f) * gs_abs(gs_tanh(GS_R(4.0) * w_f * r->inv_load_speed_threshold));
 }
 
+/* Regularised, the meshing loss of a freely moving driven side is the
+ * set-valued law at the strength the speed-driven rigid rig's smoothing
+ * gives it at the (sub-)step's start: the coefficients times
+ * s = |tanh(4 w_F/w_th)| (load-dependent laws, speed threshold) or
+ * |tanh(4 T_F w_F/p_th)| (efficiency laws, power threshold; T_F the last net
+ * follower torque). Zero at rest, so the mesh creeps like the load's
+ * friction; a weaker set-valued law is still passive. */
+static gs_mesh_friction_ regularised_law(const rig_consts_ *r, const gs_mesh_friction_ *law, gs_real t_f, gs_real w_f)
+{
+    const gs_mesh_ *m = &r->mesh;
+    gs_mesh_friction_ out = *law;
+    if (!law->lossy) {
+        return out;
+    }
+    const int on_speed = m->friction == GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY
+                         || m->friction == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY;
+    const gs_real x = on_speed ? w_f * m->inv_speed_threshold : t_f * w_f * m->inv_power_threshold;
+    const gs_real strength = gs_abs(gs_tanh(GS_R(4.0) * x));
+    out.c0 *= strength;
+    out.k_fd *= strength;
+    out.k_bd *= strength;
+    out.q_fd = out.k_fd < GS_R(1.0) ? out.k_fd / (GS_R(1.0) - out.k_fd) : GS_R(-1.0);
+    out.q_bd = out.k_bd / (GS_R(1.0) + out.k_bd);
+    return out;
+}
+
 static gs_real harmonics(const gs_real *a, const gs_real *b, gs_real angle)
 {
     gs_real c1;
@@ -693,7 +719,10 @@ static void rigid_torque_driven(const rig_consts_ *r, gs_rig_state *st, const gs
          * symplectic Euler, so the ripple's potential energy does not drift */
         drive -= ripple_torque(r, st->base_angle);
     }
-    const geared_end e = geared_solve(r, law, r->dt, r->inv_dt, &r->geared_base, w, drive, in->load + r->load_offset);
+    const gs_mesh_friction_ law_now = r->friction_regularised ? regularised_law(r, law, st->block.follower_torque, a * w)
+                                                               : *law;
+    const geared_end e =
+        geared_solve(r, &law_now, r->dt, r->inv_dt, &r->geared_base, w, drive, in->load + r->load_offset);
     const gs_real w_f = a * e.w;
     const gs_real tau_b = m->mu_base * e.w + a * (e.tau_mesh - e.t_f);
     const gs_real tau_f = e.t_f + m->mu_follower * w_f;
@@ -755,14 +784,17 @@ static void compliant_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss
             ripple = ripple_torque(r, st->base_angle + GS_R(0.5) * h * w);
         }
         const gs_real spring = r->stiffness * phi - ripple;
-        geared_end e = geared_solve(r, law, h, inv_h, &r->geared_base, w, spring + g * (w_d - GS_R(0.5) * w), push);
+        const gs_mesh_friction_ law_now =
+            r->friction_regularised ? regularised_law(r, law, st->block.follower_torque, a * w) : *law;
+        geared_end e =
+            geared_solve(r, &law_now, h, inv_h, &r->geared_base, w, spring + g * (w_d - GS_R(0.5) * w), push);
         gs_real w_adv = GS_R(0.5) * (w + e.w);
         /* the dissipative torque on the base gear (base-referred) opposes w',
          * and so the mean speed too, unless the gear stops or turns within
          * the sub-step */
         if (!(w * e.w > GS_R(0.0)) &&
             (m->mu_base * e.w + a * (e.coulomb + m->mu_follower * a * e.w + e.tau_mesh)) * w_adv < GS_R(0.0)) {
-            e = geared_solve(r, law, h, inv_h, &r->geared_base_end, w, spring + g * w_d, push);
+            e = geared_solve(r, &law_now, h, inv_h, &r->geared_base_end, w, spring + g * w_d, push);
             w_adv = e.w;
         }
         const gs_real phi_end = phi + h * (w_d - w_adv);
@@ -1057,7 +1089,12 @@ static void backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
             if (law_per_substep && k > 0) {
                 gs_mesh_friction_law(m, ctx, t_f, law);
             }
-            e = substep_friction(r, law, &c, w_f, w_b_free, momentum, &tau_mesh, &t_f);
+            if (r->friction_regularised) {
+                const gs_mesh_friction_ law_now = regularised_law(r, law, t_f, w_f);
+                e = substep_friction(r, &law_now, &c, w_f, w_b_free, momentum, &tau_mesh, &t_f);
+            } else {
+                e = substep_friction(r, law, &c, w_f, w_b_free, momentum, &tau_mesh, &t_f);
+            }
         }
         /* x moves with the relative speed the contact was solved for: the end
          * speeds give it back only to rounding, and that rounding times the

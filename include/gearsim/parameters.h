@@ -255,8 +255,8 @@
       "teeth Z of the base gear or pinion per revolution (>= 1 with a mesh ripple)")                                \
     X(BOOL, int, load_friction_regularised, 1, "load_friction_regularised", "load_friction_regularised", "", "",    \
       NONE, FIXED,                                                                                                  \
-      "on: a freely moving driven side's friction is F*tanh(4 v/load_coulomb_speed_threshold), a damper that "      \
-      "creeps (no stiction); off: the set-valued Coulomb law")                                                      \
+      "on: a freely moving driven side's friction is F*tanh(4 v/load_coulomb_speed_threshold) and the meshing "     \
+      "loss takes its smoothing's strength: both creep (no stiction); off: set-valued laws")                        \
     X(BOOL, int, base_speed_ramp, 1, "base_speed_ramp", "base_speed_ramp", "", "", NONE, FIXED,                     \
       "speed-driven rigid mesh, on: the speed terms at the step's mean speed (the samples' linear ramp), so every " \
       "torque is a step mean; off: at this sample")

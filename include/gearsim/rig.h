@@ -33,8 +33,9 @@
  * base_speed/base_angle the base gear's; with base_inertia 0 the spring acts
  * at the mesh), and a torque ripple on the base side, periodic in the base
  * angle per revolution and per tooth. Two switches, also off by default:
- * load_friction_regularised makes a freely moving driven side's friction the
- * smooth law of the speed-driven rigid rig (it creeps, no stiction), and
+ * load_friction_regularised makes a freely moving driven side's friction and
+ * meshing loss the smooth laws of the speed-driven rigid rig (they creep, no
+ * stiction), and
  * base_speed_ramp evaluates the speed-driven rigid rig at the step's mean
  * speed.
  */

@@ -10,6 +10,9 @@
  *             creeps at v* = (v_th/4)*atanh(L/F) instead of sticking.
  *             Decelerating freely from v0 (J dv/dt = -F tanh(k v), k = 4/v_th):
  *             sinh(k v(t)) = sinh(k v0)*exp(-k F t/J).
+ *             The meshing loss takes its smoothing's strength at each
+ *             step's start: the idle torque of the load-dependent law
+ *             lets the gear creep at w_F = (w_th/4)*atanh(T_m/tau_0).
  *  Compliant mesh        base_inertia 0: the spring k, c carries the drive's
  *             torque to the driven side alone, J_eff = a^2*J_F. Drive at
  *             rest, load L: the twist settles at phi_inf = -a*L/k whatever the
@@ -106,6 +109,53 @@ static void test_creep_under_load(void **state)
                     if (backlash) /* the teeth never touched */
                         assert_true(is_zero((double)out.contact_force));
                 }
+}
+
+/* The meshing loss regularised (physics.md 11.6): a torque-driven rigid
+ * gear with the load-dependent law, idle torque tau_0 on the base, no load,
+ * a motor torque T_m below tau_0. The set-valued mesh holds it at exactly
+ * zero speed; regularised, the loss takes the strength
+ * s = |tanh(4 w_F/w_th)| at each step's start, and the gear settles where
+ * the motor torque balances the idle loss, |T_m| = tau_0*s (the net
+ * follower torque is zero then, so the load slope drops out):
+ * |w_F| = (w_th/4)*atanh(|T_m|/tau_0), turning the way the motor pushes. The
+ * approach rate, tau_0*(4/(g w_th))/J_eff = 833 1/s at dt = 1 ms, is inside
+ * the explicit strength's stable range (< 2/dt). */
+static void test_mesh_loss_creeps(void **state)
+{
+    const double tau_idle = 1.0, w_th = 0.04, j_b = 0.01, j_f = 0.2;
+    const double motors[] = {0.3, -0.7, 0.95};
+    (void)state;
+    for (int regularised = 0; regularised <= 1; ++regularised)
+        for (size_t i = 0; i < sizeof motors / sizeof motors[0]; ++i) {
+            gs_rig_params rp = gs_rig_params_default();
+            rp.base_drive = GS_BASE_TORQUE_DRIVEN;
+            rp.base_inertia_kg_m2 = R(j_b);
+            rp.driven_inertia = R(j_f);
+            rp.load_friction_regularised = regularised;
+            gs_simple_gear_params gp = gs_simple_gear_params_default();
+            gp.teeth_ratio = R(GEAR_RATIO);
+            gp.output_shaft_rotates = GS_ROTATES_OPPOSITE;
+            gp.friction_model = GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY;
+            gp.idle_torque_Nm = R(tau_idle);
+            gp.nominal_output_torque_Nm = R(100.0); /* room for the idle torque: g*tau_0 <= 100*(1/0.9 - 1) */
+            gp.efficiency_nominal = R(0.9);
+            gp.speed_threshold_rad_s = R(w_th);
+            test_rig rig;
+            INIT_GEAR_RIG(&rig, &gp, &rp);
+            const gs_rig_input in = rig_torque_input(motors[i], 0.0);
+            gs_rig_output out;
+            for (int k = 0; k < 2000; ++k)
+                gs_rig_step(&rig.c, &rig.s, &in, &out);
+            if (!regularised) {
+                assert_true(is_zero((double)out.base_speed));
+                continue;
+            }
+            /* opposite rotation: the follower turns against the base */
+            const double w_f = -copysign(0.25 * w_th * atanh(fabs(motors[i]) / tau_idle), motors[i]);
+            ASSERT_NEAR(out.follower_speed, w_f, TOL_ACC, 0.0);
+            ASSERT_NEAR(out.base_speed, -GEAR_RATIO * w_f, TOL_ACC, 0.0);
+        }
 }
 
 /* Backlash rig, base at rest, no load: the follower given a speed in the
@@ -376,6 +426,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_creep_under_load),
         cmocka_unit_test(test_free_deceleration),
+        cmocka_unit_test(test_mesh_loss_creeps),
         cmocka_unit_test(test_compliant_mesh_ring),
         cmocka_unit_test(test_compliant_mesh_creep),
         cmocka_unit_test(test_compliant_mesh_passive),
