@@ -96,9 +96,7 @@ def rig_time_columns(
     needed.update({name + BEFORE_SUFFIX: name for name in marker.time_base.held})
     found: list[Column] = []
     for name, unit_of in needed.items():
-        col = resolve(
-            name, None, fields, block=spec.block, spec=spec, shown=shown, line=line, how=how
-        )
+        col = resolve(name, None, fields, spec=spec, shown=shown, line=line, how=how)
         if col is None:
             raise MeasurementError(
                 f"missing column: the first line (line {marker.line}) says time_base=rig, "

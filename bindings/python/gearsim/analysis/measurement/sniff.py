@@ -203,7 +203,6 @@ def find_columns(
             canonical,
             columns.get(canonical),
             layout.fields,
-            block=spec.block,
             spec=spec,
             shown=shown,
             line=layout.header.line,
@@ -253,7 +252,6 @@ def resolve(
     mapped: str | None,
     fields: list[str],
     *,
-    block: str,
     spec: RigSpec,
     shown: str,
     line: int,
@@ -263,79 +261,125 @@ def resolve(
     optional column is absent. Raises on missing, ambiguous or duplicated."""
     source = unicodedata.normalize("NFC", mapped) if mapped is not None else canonical
     parsed = [name_unit(h) for h in fields]
-
-    def exact(text: str) -> list[int]:
-        return [i for i, h in enumerate(fields) if h == text]
-
-    def bare(text: str, fold: bool = False) -> list[int]:
-        if fold:
-            return [i for i, (n, _u) in enumerate(parsed) if n.casefold() == text.casefold()]
-        return [i for i, (n, _u) in enumerate(parsed) if n == text]
-
     fm = _FACTOR.match(source) if mapped is not None else None
-    attempts: list[tuple[list[int], float | None]] = [(exact(source), None)]
-    if fm:
-        attempts.append((exact(fm.group("name")), float(fm.group("factor"))))
-    attempts.append((bare(source), None))
-    if fm:
-        attempts.append((bare(fm.group("name")), float(fm.group("factor"))))
-    attempts.append((bare(source, fold=True), None))
-    for hits, factor in attempts:
-        if not hits:
-            continue
-        if len(hits) > 1:
-            listed = ", ".join(f"'{printable(fields[i], 40)}' (column {i + 1})" for i in hits[:4])
-            if len({fields[i] for i in hits}) == 1:
-                raise MeasurementError(
-                    f"header names column '{printable(fields[hits[0]], 60)}' twice "
-                    f"(columns {hits[0] + 1} and {hits[1] + 1})",
-                    file=shown,
-                    line=line,
-                    column=printable(fields[hits[0]], 60),
-                )
-            raise MeasurementError(
-                f"several header columns could be '{canonical}': {listed}; choose one with "
-                f"--column {canonical}=HEADER",
-                file=shown,
-                line=line,
-                column=canonical,
-            )
-        i = hits[0]
-        col = Column(canonical, i, fields[i], unit=parsed[i][1])
-        if factor is not None:
-            if not np.isfinite(factor) or factor == 0.0:
-                raise MeasurementError(
-                    f"scale factor '{printable(fm.group('factor'))}' of the mapping for "
-                    f"'{canonical}' must be finite and non-zero",
-                    file=shown,
-                    column=canonical,
-                )
-            col.factor, col.explicit_factor = factor, True
-        return col
-
+    for hits, factor in _attempts(source, fm, fields, parsed):
+        if hits:
+            return _column(canonical, hits, factor, fm, fields, parsed, shown, line)
     if mapped is not None:
-        name, star, factor_text = source.rpartition("*")
-        if star and (exact(name.strip()) or bare(name.strip())):
-            raise MeasurementError(
-                f"scale factor '{printable(factor_text.strip(), 30)}' of the mapping for "
-                f"'{canonical}' is not a number",
-                file=shown,
-                column=canonical,
-            )
+        _check_factor_text(canonical, source, fields, parsed, shown)
     if canonical not in spec.required and mapped is None:
         return None
+    raise _missing(canonical, mapped, source, fields, spec, shown, line, how)
+
+
+def _exact(fields: list[str], text: str) -> list[int]:
+    return [i for i, h in enumerate(fields) if h == text]
+
+
+def _bare(parsed: list[tuple[str, str | None]], text: str, fold: bool = False) -> list[int]:
+    if fold:
+        return [i for i, (n, _u) in enumerate(parsed) if n.casefold() == text.casefold()]
+    return [i for i, (n, _u) in enumerate(parsed) if n == text]
+
+
+def _attempts(
+    source: str,
+    fm: re.Match[str] | None,
+    fields: list[str],
+    parsed: list[tuple[str, str | None]],
+) -> list[tuple[list[int], float | None]]:
+    """The header columns `source` may name, best first, each with the
+    mapping's factor when it was read off `source`: the header text as it is,
+    the name without its unit, the name case-folded."""
+    attempts: list[tuple[list[int], float | None]] = [(_exact(fields, source), None)]
+    if fm:
+        attempts.append((_exact(fields, fm.group("name")), float(fm.group("factor"))))
+    attempts.append((_bare(parsed, source), None))
+    if fm:
+        attempts.append((_bare(parsed, fm.group("name")), float(fm.group("factor"))))
+    attempts.append((_bare(parsed, source, fold=True), None))
+    return attempts
+
+
+def _column(
+    canonical: str,
+    hits: list[int],
+    factor: float | None,
+    fm: re.Match[str] | None,
+    fields: list[str],
+    parsed: list[tuple[str, str | None]],
+    shown: str,
+    line: int,
+) -> Column:
+    """The one column of `hits`; several are an error (the same header twice,
+    or names that all fit)."""
+    if len(hits) > 1:
+        listed = ", ".join(f"'{printable(fields[i], 40)}' (column {i + 1})" for i in hits[:4])
+        if len({fields[i] for i in hits}) == 1:
+            raise MeasurementError(
+                f"header names column '{printable(fields[hits[0]], 60)}' twice "
+                f"(columns {hits[0] + 1} and {hits[1] + 1})",
+                file=shown,
+                line=line,
+                column=printable(fields[hits[0]], 60),
+            )
+        raise MeasurementError(
+            f"several header columns could be '{canonical}': {listed}; choose one with "
+            f"--column {canonical}=HEADER",
+            file=shown,
+            line=line,
+            column=canonical,
+        )
+    i = hits[0]
+    col = Column(canonical, i, fields[i], unit=parsed[i][1])
+    if factor is not None:
+        if not np.isfinite(factor) or factor == 0.0:
+            raise MeasurementError(
+                f"scale factor '{printable(fm.group('factor'))}' of the mapping for "
+                f"'{canonical}' must be finite and non-zero",
+                file=shown,
+                column=canonical,
+            )
+        col.factor, col.explicit_factor = factor, True
+    return col
+
+
+def _check_factor_text(
+    canonical: str,
+    source: str,
+    fields: list[str],
+    parsed: list[tuple[str, str | None]],
+    shown: str,
+) -> None:
+    """A mapping 'HEADER*TEXT' whose HEADER is in the header: TEXT is not a number."""
+    name, star, factor_text = source.rpartition("*")
+    if star and (_exact(fields, name.strip()) or _bare(parsed, name.strip())):
+        raise MeasurementError(
+            f"scale factor '{printable(factor_text.strip(), 30)}' of the mapping for "
+            f"'{canonical}' is not a number",
+            file=shown,
+            column=canonical,
+        )
+
+
+def _missing(
+    canonical: str,
+    mapped: str | None,
+    source: str,
+    fields: list[str],
+    spec: RigSpec,
+    shown: str,
+    line: int,
+    how: str,
+) -> MeasurementError:
+    """The error for a column the header lacks: what the header has, and a
+    hint when the header row looks wrong."""
     have = ", ".join(f"'{printable(h, 40)}'" for h in fields[:12] if h) or "none"
     if len(fields) > 12:
         have += f", ... ({len(fields) - 12} more)"
-    hint = ""
-    if fields and all(_NUM_START.match(h) for h in fields if h):
-        hint = " (that line holds numbers: the file has no header row?)"
-    elif len(fields) == 1:
-        hint = " (one field only: is the separator something else than ',', ';' or tab?)"
-    elif how:
-        hint = f" (read{how})"
+    hint = _header_hint(fields, how)
     if canonical not in spec.required:
-        raise MeasurementError(
+        return MeasurementError(
             f"mapped column '{printable(source, 60)}' is not in the header; "
             f"the header has {have}{hint}",
             file=shown,
@@ -343,10 +387,20 @@ def resolve(
             column=printable(source, 60),
         )
     what = f" (mapped from '{printable(source, 60)}')" if mapped is not None else ""
-    raise MeasurementError(
-        f"missing column{what}; the {block} rig needs {', '.join(spec.required)}; "
+    return MeasurementError(
+        f"missing column{what}; the {spec.block} rig needs {', '.join(spec.required)}; "
         f"the header has {have}{hint}",
         file=shown,
         line=line,
         column=printable(source, 60),
     )
+
+
+def _header_hint(fields: list[str], how: str) -> str:
+    if fields and all(_NUM_START.match(h) for h in fields if h):
+        return " (that line holds numbers: the file has no header row?)"
+    if len(fields) == 1:
+        return " (one field only: is the separator something else than ',', ';' or tab?)"
+    if how:
+        return f" (read{how})"
+    return ""
