@@ -22,15 +22,16 @@ line each, even with --quiet.
 One module per subcommand (:mod:`.compare`, :mod:`.diagnose`, :mod:`.fit`,
 :mod:`.report`), each with ``NAME``, ``HELP``, ``REQUIRES`` (the modules of the
 analysis extra it cannot run without, checked before it starts),
-``add_parser(subparsers)`` and ``execute(args)``; what they share is in
-:mod:`.common`. gearsim/cli.py finds :func:`register` through its
-``PLUGIN_MODULES``.
+``configure(parser)`` (its options) and ``execute(args)`` (its run, returning
+the exit status); what they share is in :mod:`.common`. gearsim/cli.py finds
+:func:`register` through its ``PLUGIN_MODULES``.
 """
 
 from __future__ import annotations
 
 import argparse
 
+from ...cli import add_command
 from . import compare, diagnose, fit, report
 
 __all__ = ["register", "COMMANDS"]
@@ -42,4 +43,11 @@ COMMANDS = (compare, diagnose, fit, report)
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Adds every analysis subcommand to the ``gearsim`` command."""
     for command in COMMANDS:
-        command.add_parser(subparsers)
+        add_command(
+            subparsers,
+            command.NAME,
+            command.HELP,
+            command.configure,
+            command.execute,
+            requires=command.REQUIRES,
+        )

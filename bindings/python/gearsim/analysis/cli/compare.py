@@ -6,7 +6,6 @@ from __future__ import annotations
 import argparse
 
 from ..._outputs import printable
-from ...cli import add_command
 from .common import common_options, emit_json, g4, input_filter, load, progress
 
 NAME = "compare"
@@ -17,8 +16,8 @@ HELP = "simulate a model on a measurement and report its error"
 REQUIRES: tuple[str, ...] = ()
 
 
-def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    add_command(subparsers, NAME, HELP, common_options, execute, requires=REQUIRES)
+def configure(p: argparse.ArgumentParser) -> None:
+    common_options(p)
 
 
 def execute(args: argparse.Namespace) -> int:

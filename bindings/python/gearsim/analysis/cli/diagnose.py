@@ -6,7 +6,6 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from ...cli import add_command
 from .common import (
     common_options,
     count,
@@ -26,11 +25,7 @@ HELP = "rank the physical effects the model lacks, with evidence"
 REQUIRES: tuple[str, ...] = ("scipy",)
 
 
-def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    add_command(subparsers, NAME, HELP, _configure, execute, requires=REQUIRES)
-
-
-def _configure(p: argparse.ArgumentParser) -> None:
+def configure(p: argparse.ArgumentParser) -> None:
     common_options(p)
     validation_options(p)
     p.add_argument(

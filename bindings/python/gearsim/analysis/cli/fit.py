@@ -9,7 +9,6 @@ import sys
 from typing import Any
 
 from ..._outputs import printable
-from ...cli import add_command
 from .common import (
     check_out,
     common_options,
@@ -31,11 +30,7 @@ HELP = "add one effect to the model and fit it"
 REQUIRES: tuple[str, ...] = ("scipy",)
 
 
-def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    add_command(subparsers, NAME, HELP, _configure, execute, requires=REQUIRES)
-
-
-def _configure(p: argparse.ArgumentParser) -> None:
+def configure(p: argparse.ArgumentParser) -> None:
     from ..effects import EFFECT_NAMES
 
     common_options(p)

@@ -8,7 +8,6 @@ import argparse
 import os
 
 from ..._outputs import printable
-from ...cli import add_command
 from .common import (
     check_out,
     common_options,
@@ -29,11 +28,7 @@ HELP = "draw compare / diagnose / fit rounds into PNG files and one HTML page"
 REQUIRES: tuple[str, ...] = ("scipy", "matplotlib")
 
 
-def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    add_command(subparsers, NAME, HELP, _configure, execute, requires=REQUIRES)
-
-
-def _configure(p: argparse.ArgumentParser) -> None:
+def configure(p: argparse.ArgumentParser) -> None:
     common_options(p)
     p.add_argument(
         "--out",
