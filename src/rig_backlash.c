@@ -187,7 +187,7 @@ static substep_end substep_friction(const rig_consts_ *r, const gs_mesh_friction
             *t_f = t_f0 - mesh_bwd;
         }
     }
-    /* regularised: the load's friction acted before the contact (backlash_step) */
+    /* regularised: the load's friction acted before the contact (gs_rig_backlash_step) */
     const gs_real level = r->friction_regularised ? GS_R(0.0) : friction_level(r, w_f);
     const gs_real fwd = mesh_fwd < GS_R(0.0) ? mesh_fwd : mesh_fwd + level;
     const gs_real bwd = mesh_bwd < GS_R(0.0) ? mesh_bwd : mesh_bwd + level;
