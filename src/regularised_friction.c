@@ -14,7 +14,7 @@
  * rigid mesh's form (the geared solve, where the damper joins the driven
  * side's implicit viscous term); with backlash the rig takes the law's value
  * at the start speed as a friction bound solved jointly with the contact
- * (src/rig.c, creep_level). */
+ * (src/rig_terms.c, gs_rig_creep_level). */
 #include "regularised_friction.h"
 #include "gs_math.h"
 
