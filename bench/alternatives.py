@@ -41,7 +41,7 @@ Python:
   piecewise-linear ramp between samples that the C rig uses.
 
 For an accurate (and slow) continuous-time reference of every block and
-friction model, see bench/reference.py.
+friction model, see tests/python/oracles/reference.py (a test oracle).
 
 All take the parameters as a plain dict (``GEAR_PARAMS`` or ``FULL_PARAMS``
 below), so that the benchmark builds the gearsim model from the same numbers

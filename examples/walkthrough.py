@@ -55,6 +55,8 @@ def _fmt_params(p: dict) -> str:
 
 
 def _show_rounds(rounds, csv: str, model_path: str) -> None:
+    from gearsim.analysis.fitting import REFIT
+
     for i, r in enumerate(rounds):
         d = r.diagnosis
         if d is None:
@@ -86,18 +88,23 @@ def _show_rounds(rounds, csv: str, model_path: str) -> None:
         if i + 1 < len(rounds):
             f = rounds[i + 1].fit
             _hr(f"round {i + 1}: fit {f.effect}")
-            print(
-                f"$ gearsim fit {csv} --model ... --add {f.effect} --out model-round-{i + 1}.toml"
-            )
+            if f.effect != REFIT:
+                print(
+                    f"$ gearsim fit {csv} --model ... --add {f.effect} "
+                    f"--out model-round-{i + 1}.toml"
+                )
             print(
                 f"nrmse {f.nrmse_before:.4f} -> {f.nrmse_after:.4f}; validation (held-out "
                 f"blocks) {f.validation_nrmse_before:.4f} -> {f.validation_nrmse_after:.4f}"
             )
+            if f.effect == REFIT:
+                print(f"$ gearsim fit {csv} --model ... --refit --out model-round-{i + 1}.toml")
+            print(f.verdict)
             for p in f.fitted:
                 before = "" if p["before"] is None else f" (was {p['before']:.4g})"
-                print(
-                    f"  {p['name']:26s} = {p['value']:.5g} +- {p['std']:.2g}{before}  [{p['role']}]"
-                )
+                # no std: the record does not determine it (a warning says why)
+                std = "(not identifiable)" if p["std"] is None else f"+- {p['std']:.2g}"
+                print(f"  {p['name']:26s} = {p['value']:.5g} {std}{before}  [{p['role']}]")
             for w in f.warnings:
                 print(f"  warning: {w['text']}")
 

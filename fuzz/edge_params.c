@@ -134,6 +134,21 @@ static void ripple_large(gs_rig_params *p)
     }
     p->ripple_mesh_teeth = 1000;
 }
+/* the regularised friction as a damper of 4e12 N*m*s/rad near rest */
+static void creep_sharp(gs_rig_params *p)
+{
+    p->load_coulomb_friction = (gs_real)1e3;
+    p->load_coulomb_speed_threshold = (gs_real)1e-9;
+    p->load_friction_regularised = 1;
+    p->base_speed_ramp = 1;
+}
+/* a compliant mesh: the spring with no base inertia, the friction creeping behind it */
+static void mesh_spring_creep(gs_rig_params *p)
+{
+    shaft_stiff(p);
+    creep_sharp(p);
+    p->base_inertia_kg_m2 = (gs_real)0.0;
+}
 static void all_terms(gs_rig_params *p)
 {
     shaft_stiff_damped(p);
@@ -169,6 +184,9 @@ static const edge_case cases[] = {
     {"ripple 1e3 N*m, Z 1000, phases 1e6", 0, gear_plain, NULL, ripple_large, 0},
     {"rack ripple + K 1e9", 1, NULL, rack_stiff, ripple_large, 0},
     {"shaft k 1e9 + Stribeck + ripple", 0, ratio_small, NULL, all_terms, 1},
+    {"regularised friction 1e3, v_th 1e-9 + backlash", 0, stiff_smooth, NULL, creep_sharp, 0},
+    {"rack regularised friction 1e3, v_th 1e-9", 1, NULL, rack_plain, creep_sharp, 0},
+    {"shaft k 1e9 at the mesh + regularised friction", 0, gear_plain, NULL, mesh_spring_creep, 1},
 };
 
 /* Triangle wave in [-1, 1]. */

@@ -251,6 +251,8 @@ static const fz_field fz_rig_fields[] = {
     FZ_A(gs_rig_params, ripple_mesh_amplitude_Nm, GS_RIPPLE_HARMONICS),
     FZ_A(gs_rig_params, ripple_mesh_phase_rad, GS_RIPPLE_HARMONICS),
     FZ_F(gs_rig_params, ripple_mesh_teeth, FZ_INT),
+    FZ_F(gs_rig_params, load_friction_regularised, FZ_INT),
+    FZ_F(gs_rig_params, base_speed_ramp, FZ_INT),
 };
 
 #define FZ_COUNT(a) (sizeof(a) / sizeof((a)[0]))

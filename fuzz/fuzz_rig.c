@@ -7,7 +7,9 @@
  * rigid mesh and backlash with the three hard-stop laws, no-pull, the static
  * lock, heat path and measured temperature; with bits 6 and 7 of the first
  * byte, the Stribeck friction and torque ripple, and the compliant base
- * shaft (speed-driven rigid rigs).
+ * shaft (speed-driven rigid rigs); with bits 6 and 7 of the third, the
+ * regularised driven-side friction and the step-mean speed (no bytes of
+ * their own).
  *
  * Input values: |base speed| <= 1e3 rad/s, |base torque| <= 1e3 N*m,
  * |load| <= 1e3 (N*m or N), temperatures in [1, 1e3] K; each is zero, a
@@ -66,6 +68,7 @@ typedef struct {
     double load_coulomb;
     double base_extra;             /* largest ripple torque on the base, N*m */
     int compliant;                 /* compliant base shaft */
+    int ramp;                      /* base_speed_ramp: torques at the step's mean speed */
     double stiffness;              /* backlash K, D, b/2, no-pull */
     double damping;
     double half_gap;
@@ -156,6 +159,8 @@ static gs_status build(fz_reader *r, gs_rig_consts *consts, gs_rig_state *state,
     rp.temperature_source = (c2 & 8U) ? GS_TEMPERATURE_FROM_INPUT : GS_TEMPERATURE_FROM_MODEL;
     rp.accel_filter_time_constant_s = (c2 & 16U) ? (gs_real)fz_log_range(r, 1e-4, 1e-1) : (gs_real)0.0;
     rp.contact_substeps = (c2 & 32U) ? (int)(fz_u8(r) % (GS_MAX_SUBSTEPS + 1)) : 0;
+    rp.load_friction_regularised = (c2 >> 6) & 1U;
+    rp.base_speed_ramp = (c2 >> 7) & 1U;
     /* The rig terms of physics.md 11 read their bytes only when their bit
      * is set, so the corpus inputs without them keep their meaning. */
     double base_extra = 0.0; /* the largest ripple torque, N*m */
@@ -284,6 +289,7 @@ static gs_status build(fz_reader *r, gs_rig_consts *consts, gs_rig_state *state,
     info->load_coulomb = fmax((double)rp.load_coulomb_friction, (double)rp.load_breakaway_friction);
     info->base_extra = base_extra;
     info->compliant = rp.compliance_stiffness_Nm_rad > (gs_real)0.0;
+    info->ramp = rp.base_speed_ramp != 0;
     info->base_inertia = (double)rp.base_inertia_kg_m2;
     info->driven_inertia = (double)rp.driven_inertia;
     info->teeth = rp.ripple_mesh_teeth;
@@ -410,8 +416,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 
         const double port = (double)o->port_power;
         const double loss = (double)o->loss_power;
-        const double w_b = fabs((double)o->base_speed);
-        const double w_f = fabs((double)o->follower_speed);
+        /* with the step-mean speed the torques are those of the mean of the
+         * last and this speed: the larger of the two bounds it */
+        const double w_b = info.ramp ? fmax(fabs((double)o->base_speed), fabs(w_b_before))
+                                     : fabs((double)o->base_speed);
+        const double w_f = info.ramp ? fmax(fabs((double)o->follower_speed), fabs(w_f_before))
+                                     : fabs((double)o->follower_speed);
         /* magnitude of the terms whose rounding the balance carries */
         const double scale = fabs((double)o->base_port_torque) * w_b
                              + fabs((double)o->follower_port_torque) * w_f + fabs(loss) + fabs(port)

@@ -238,7 +238,7 @@
     X(REAL, gs_real, compliance_stiffness_Nm_rad, 1, "compliance_stiffness", "compliance_stiffness", "N*m/rad",     \
       "N*m/rad", NONE, FIXED,                                                                                       \
       "torsional stiffness k of the base shaft, drive to base gear "                                               \
-      "(0 = rigid; else base_inertia > 0, speed-driven base, no backlash)")                                        \
+      "(0 = rigid; speed-driven base, no backlash; base_inertia 0 puts the spring at the mesh)")                   \
     X(REAL, gs_real, compliance_damping_Nm_s_rad, 1, "compliance_damping", "compliance_damping", "N*m*s/rad",       \
       "N*m*s/rad", NONE, FIXED, "torsional damping c of the base shaft (>= 0)")                                     \
     X(ARRAY, gs_real, ripple_revolution_amplitude_Nm, GS_RIPPLE_HARMONICS, "ripple_revolution_amplitude",           \
@@ -252,7 +252,14 @@
     X(ARRAY, gs_real, ripple_mesh_phase_rad, GS_RIPPLE_HARMONICS, "ripple_mesh_phase", "ripple_mesh_phase",         \
       "rad", "rad", NONE, TUNABLE, "phases psi_j of the per-tooth ripple harmonics")                                \
     X(INT, int, ripple_mesh_teeth, 1, "ripple_mesh_teeth", "ripple_mesh_teeth", "", "", NONE, FIXED,                \
-      "teeth Z of the base gear or pinion per revolution (>= 1 with a mesh ripple)")
+      "teeth Z of the base gear or pinion per revolution (>= 1 with a mesh ripple)")                                \
+    X(BOOL, int, load_friction_regularised, 1, "load_friction_regularised", "load_friction_regularised", "", "",    \
+      NONE, FIXED,                                                                                                  \
+      "on: a freely moving driven side's friction is F*tanh(4 v/load_coulomb_speed_threshold) and the meshing "     \
+      "loss takes its smoothing's strength: both creep (no stiction); off: set-valued laws")                        \
+    X(BOOL, int, base_speed_ramp, 1, "base_speed_ramp", "base_speed_ramp", "", "", NONE, FIXED,                     \
+      "speed-driven rigid mesh, on: the speed terms at the step's mean speed (the samples' linear ramp), so every " \
+      "torque is a step mean; off: at this sample")
 
 /* ---- expanders */
 

@@ -30,8 +30,14 @@
  * rest up to the breakaway level), a compliant base shaft (spring and damper
  * from the drive to the base gear, which turns with base_inertia; speed-driven
  * base and rigid mesh only; base_torque is then the shaft torque and
- * base_speed/base_angle the base gear's), and a torque ripple on the base
- * side, periodic in the base angle per revolution and per tooth.
+ * base_speed/base_angle the base gear's; with base_inertia 0 the spring acts
+ * at the mesh), and a torque ripple on the base side, periodic in the base
+ * angle per revolution and per tooth. Two switches, also off by default:
+ * load_friction_regularised makes a freely moving driven side's friction and
+ * meshing loss the smooth laws of the speed-driven rigid rig (they creep, no
+ * stiction), and
+ * base_speed_ramp evaluates the speed-driven rigid rig at the step's mean
+ * speed.
  */
 #ifndef GEARSIM_RIG_H
 #define GEARSIM_RIG_H
@@ -117,9 +123,9 @@ GS_API extern const gs_field_info gs_rig_state_info[GS_RIG_STATE_FIELDS];
  * stale count, and the compiler's message gives the value to write here
  * (src/mesh.h, GS_CONSTS_REALS_CHECK_). */
 #ifdef GS_SINGLE_PRECISION
-#define GS_RIG_CONSTS_REALS 249
+#define GS_RIG_CONSTS_REALS 251
 #else
-#define GS_RIG_CONSTS_REALS 241
+#define GS_RIG_CONSTS_REALS 242
 #endif
 typedef struct {
     gs_real opaque_[GS_RIG_CONSTS_REALS];

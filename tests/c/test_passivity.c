@@ -75,6 +75,7 @@ typedef struct {
     long block[2], friction[5], smoothing[2], drive[2], mesh[3], law[3], no_pull[2], lock[2];
     long substeps[7]; /* automatic, 1, 2, 4, 8, 16, 64 */
     long stribeck, ripple, heat_path, low_eta, self_locking_table;
+    long regularised, speed_ramp, mesh_spring; /* the rig switches; a compliance without base inertia */
     double worst; /* largest (created - tol)/tol seen (negative: all passed) */
     long failed_rigs, failed_by_mesh[3], failed_by_drive[2];
 } coverage;
@@ -180,6 +181,17 @@ static void draw_case(test_rng *r, rig_case *c, coverage *cov)
         }
         if (c->ripple_stiffness > 0.0)
             ++cov->ripple;
+    }
+    /* the rig switches, drawn for every rig (each changes only the paths
+     * it names: the regularised friction where the driven side moves
+     * freely, the step-mean speed in the speed-driven rigid rig) */
+    c->rp.load_friction_regularised = chance(r, 0.3);
+    cov->regularised += c->rp.load_friction_regularised;
+    c->rp.base_speed_ramp = chance(r, 0.3);
+    cov->speed_ramp += c->rp.base_speed_ramp && !torque && !compliant && !backlash;
+    if (compliant && chance(r, 0.2)) { /* the spring at the mesh */
+        c->rp.base_inertia_kg_m2 = R(0.0);
+        ++cov->mesh_spring;
     }
     eta = draw_eta(r);
     if (c->gear) {
@@ -433,7 +445,11 @@ static int run_case(const rig_case *c, int index, test_rng *r, coverage *cov)
         assert_true(rig_output_finite(&o));
         push = (double)in.load + (double)c->rp.load_offset;
         if (checked) {
-            const double wb = fabs((double)o.base_speed), wf = fabs((double)o.follower_speed);
+            /* the step-mean speed: the torques are those of the mean of the
+             * last and this speed, which the larger of the two bounds */
+            const int ramp = c->rp.base_speed_ramp != 0;
+            const double wb = ramp ? fmax(fabs((double)o.base_speed), fabs(w_b)) : fabs((double)o.base_speed);
+            const double wf = ramp ? fmax(fabs((double)o.follower_speed), fabs(w_f)) : fabs((double)o.follower_speed);
             const double f_abs = fabs((double)o.contact_force);
             const double e1 = (double)o.contact_energy;
             const double p_scale = fabs((double)o.base_port_torque) * wb + fabs((double)o.follower_port_torque) * wf +
@@ -546,9 +562,11 @@ static void print_coverage(const coverage *c)
                   c->drive[0], c->drive[1], c->mesh[0], c->mesh[1], c->mesh[2], c->law[0], c->law[1], c->law[2],
                   c->no_pull[1], c->no_pull[0], c->lock[1], c->lock[0]);
     print_message("  contact sub-steps auto %ld, 1 %ld, 2 %ld, 4 %ld, 8 %ld, 16 %ld, 64 %ld; Stribeck %ld, ripple %ld, "
-                  "heat path %ld, lossy with eta < 0.2 %ld; worst (created - tol)/tol %.3g\n",
+                  "heat path %ld, lossy with eta < 0.2 %ld; regularised friction %ld, step-mean speed %ld, spring at "
+                  "the mesh %ld; worst (created - tol)/tol %.3g\n",
                   c->substeps[0], c->substeps[1], c->substeps[2], c->substeps[3], c->substeps[4], c->substeps[5],
-                  c->substeps[6], c->stribeck, c->ripple, c->heat_path, c->low_eta, c->worst);
+                  c->substeps[6], c->stribeck, c->ripple, c->heat_path, c->low_eta, c->regularised, c->speed_ramp,
+                  c->mesh_spring, c->worst);
 }
 
 static void test_random_rigs_create_no_energy(void **state)

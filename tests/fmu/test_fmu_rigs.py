@@ -332,6 +332,45 @@ def _scenarios():
                 "inputs.load": np.full_like(t, 2.0),
             },
         ),
+        # issue 22: a compliant mesh (no base inertia) with the driven
+        # friction creeping behind it, and the step-mean speed of a rigid rack
+        "gear_speed_mesh_spring_creep": dict(
+            rig="gear",
+            dt=1e-3,
+            substeps=1,
+            n=250,
+            start={
+                "friction_model": 1,
+                "efficiency_const": 0.9,
+                "base_inertia": 0.0,
+                "compliance_stiffness": 400.0,
+                "compliance_damping": 0.2,
+                "load_coulomb_friction": 0.3,
+                "load_coulomb_speed_threshold": 0.05,
+                "load_friction_regularised": True,
+            },
+            inputs=lambda t: {
+                "inputs.base_speed": 12.0 * np.sin(two_pi * 2.0 * t),
+                "inputs.load": np.where(t < 0.2, 0.5, -1.0),
+            },
+        ),
+        "rack_speed_ramp_creep": dict(
+            rig="rack",
+            dt=1e-3,
+            substeps=1,
+            n=200,
+            start={
+                "rack_mass": 1.0,
+                "pinion_radius": 0.02,
+                "load_coulomb_friction": 3.0,
+                "base_speed_ramp": True,
+                "load_friction_regularised": True,
+            },
+            inputs=lambda t: {
+                "inputs.base_speed": 20.0 * np.sin(two_pi * 4.0 * t),
+                "inputs.load": np.full_like(t, 1.0),
+            },
+        ),
     }
 
 
@@ -425,7 +464,9 @@ BAD_VALUES = [
         "load_breakaway_friction",
     ),
     ("rack", {"load_breakaway_friction": 1.0, "load_stribeck_speed": 0.0}, "load_stribeck_speed"),
-    ("gear", {"compliance_stiffness": 100.0}, "base_inertia"),
+    # base_inertia 0 with a compliance puts the spring at the mesh (issue 22);
+    # a negative one is still refused
+    ("gear", {"compliance_stiffness": 100.0, "base_inertia": -1e-3}, "base_inertia"),
     (
         "rack",
         {"compliance_stiffness": 100.0, "base_inertia": 1e-3, "base_drive": 1},

@@ -1,6 +1,6 @@
 """The Python alternatives of the benchmark (bench/alternatives.py) against
 gearsim and against the independent continuous-time reference of
-bench/reference.py (issue 12).
+tests/python/oracles/reference.py.
 
 python_loop_full is the full Simple Gear rig (sg_full) in plain Python: the
 documented backward-Euler contact scheme, with the mesh loss (D1: solved in
@@ -59,6 +59,7 @@ import pytest
 import gearsim
 
 BENCH = Path(__file__).resolve().parents[2] / "bench"
+ORACLES = Path(__file__).resolve().parent / "oracles"
 
 # python_loop_full vs gearsim at the benchmark settings: fractions of the peak
 DIRECT = {"base_torque": 3e-2, "follower_speed": 3e-3, "backlash_position": 1e-2}
@@ -74,8 +75,8 @@ FINE_REF_TEMPERATURE_K = 0.03
 ODE_SPEED_MAX = 1e-6
 
 
-def _load(name: str, file: str):
-    spec = importlib.util.spec_from_file_location(name, BENCH / file)
+def _load(name: str, path: Path):
+    spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -84,12 +85,12 @@ def _load(name: str, file: str):
 @pytest.fixture(scope="module")
 def alt():
     """bench/alternatives.py, loaded from its path (bench/ is not a package)."""
-    return _load("gearsim_bench_alternatives", "alternatives.py")
+    return _load("gearsim_bench_alternatives", BENCH / "alternatives.py")
 
 
 @pytest.fixture(scope="module")
 def ref_module():
-    return _load("gearsim_bench_reference", "reference.py")
+    return _load("gearsim_reference", ORACLES / "reference.py")
 
 
 def _params(alt, variant: str, substeps: int = 0) -> dict:

@@ -169,7 +169,7 @@ def test_subpackages_and_help_import_without_extras():
     out = _run_blocked(
         """
         import contextlib, io
-        import gearsim.analysis, gearsim.analysis.commands, gearsim.hil, gearsim.hil.cli
+        import gearsim.analysis, gearsim.analysis.cli, gearsim.hil, gearsim.hil.cli
         from gearsim.cli import main
 
         buf = io.StringIO()
@@ -281,7 +281,7 @@ def test_cantools_alone_missing_is_named():
 def test_a_late_import_of_an_extra_is_named(monkeypatch, capsys):
     """A module of an extra that a command imports while it runs, beyond what
     it declared, still ends in the one line and status 2, not an internal error."""
-    from gearsim.analysis import commands
+    from gearsim.analysis.cli import compare as command
 
     monkeypatch.setitem(EXTRAS, "analysis", (*EXTRAS["analysis"], "gearsim_no_such_module"))
 
@@ -290,7 +290,7 @@ def test_a_late_import_of_an_extra_is_named(monkeypatch, capsys):
 
         return 0
 
-    monkeypatch.setattr(commands, "_compare", compare)
+    monkeypatch.setattr(command, "execute", compare)
     status = cli.main(["compare", str(DEMO_CSV), "--model", str(DEMO_MODEL)])
     err = capsys.readouterr().err
     assert status == cli.EXIT_BAD_INPUT
@@ -301,14 +301,14 @@ def test_a_late_import_of_an_extra_is_named(monkeypatch, capsys):
 
 
 def test_a_missing_module_of_no_extra_stays_an_internal_error(monkeypatch, capsys):
-    from gearsim.analysis import commands
+    from gearsim.analysis.cli import compare as command
 
     def compare(args):
         import gearsim_no_such_module  # noqa: F401
 
         return 0
 
-    monkeypatch.setattr(commands, "_compare", compare)
+    monkeypatch.setattr(command, "execute", compare)
     status = cli.main(["compare", str(DEMO_CSV), "--model", str(DEMO_MODEL)])
     assert status == cli.EXIT_INTERNAL
     assert "internal error: ModuleNotFoundError" in capsys.readouterr().err

@@ -1,5 +1,5 @@
 """gearsim's C rig with backlash against the independent reference of
-bench/reference.py (issue 12).
+tests/python/oracles/reference.py.
 
 The reference is a continuous-time model written from docs/physics.md
 (sections 0-6, 8, 11 and the correction of 4.6) and the decisions D1/D2: a
@@ -96,7 +96,7 @@ import pytest
 
 import gearsim
 
-BENCH = Path(__file__).resolve().parents[2] / "bench"
+ORACLES = Path(__file__).resolve().parent / "oracles"
 
 DT = 1e-3
 SUBSTEPS = 64
@@ -113,7 +113,7 @@ SETTLED_THERMAL_RTOL = 5e-4
 
 
 def _load_reference():
-    spec = importlib.util.spec_from_file_location("gearsim_bench_reference", BENCH / "reference.py")
+    spec = importlib.util.spec_from_file_location("gearsim_reference", ORACLES / "reference.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module

@@ -243,7 +243,7 @@ def test_model_file_round_trip_with_the_new_keys(tmp_path):
             "GS_E_BREAKAWAY",
         ),
         ({"load_breakaway_friction": 1.0, "load_stribeck_speed": 0.0}, "load_stribeck_speed", None),
-        ({"compliance_stiffness": 100.0}, "base_inertia", "GS_E_NOT_POSITIVE"),
+        ({"compliance_stiffness": 100.0, "base_inertia": -1.0}, "base_inertia", "GS_E_NEGATIVE"),
         (
             {"compliance_stiffness": 100.0, "base_inertia": 1e-3, "base_drive": "torque"},
             "compliance_stiffness",

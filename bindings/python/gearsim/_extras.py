@@ -18,7 +18,7 @@ __all__ = ["EXTRAS", "MissingExtraError", "extra_of", "find_missing", "require",
 
 #: extra -> the top-level modules its distributions install (python-can is ``can``).
 EXTRAS: dict[str, tuple[str, ...]] = {
-    "analysis": ("scipy", "pandas", "zstandard", "matplotlib"),
+    "analysis": ("scipy", "pandas", "zstandard", "matplotlib", "threadpoolctl"),
     "hil": ("can", "cantools"),
     "fmu": ("fmpy",),
     "fleet": ("dask", "distributed", "pyarrow", "tqdm"),

@@ -72,7 +72,7 @@ EXIT_BROKEN_PIPE = 141
 EXIT_INTERRUPTED = 130
 
 #: Modules tried for a ``register(subparsers)`` function, in order.
-PLUGIN_MODULES: list[str] = ["gearsim.analysis.commands", "gearsim.hil.cli", "gearsim.fleet.cli"]
+PLUGIN_MODULES: list[str] = ["gearsim.analysis.cli", "gearsim.hil.cli", "gearsim.fleet.cli"]
 
 #: The first lines of ``gearsim --help``.
 START_HERE = """\

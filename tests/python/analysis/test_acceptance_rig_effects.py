@@ -38,6 +38,7 @@ from independent import BEYOND_SEED_TRUTHS, RIGS, gearsim_model, generate, mecha
 
 from gearsim.analysis import fit
 from gearsim.analysis import modelkit as mk
+from gearsim.analysis.fitting import REFIT
 from gearsim.analysis.report import run_rounds
 
 #: hidden effect -> the effects of its record and generate()'s options
@@ -50,14 +51,12 @@ RECORDS = {
 CASES = [(block, effect) for block in RIGS for effect in BEYOND_SEED_TRUTHS[block]]
 
 
-# The known limit of a rigid rig against a compliant mesh under Coulomb
-# friction on the rack (test_acceptance.py, RACK_COULOMB_STRUCTURE): 1.47x
-# the floor with the true parameters here, 1.53x after the two rounds.
-RACK_COULOMB_STRUCTURE = pytest.mark.xfail(
-    strict=True,
-    reason="rigid rig vs compliant mesh under Coulomb friction on the rack: "
-    "1.47x the floor with the true parameters",
-)
+# A rigid rig against a compliant mesh under Coulomb friction on the rack
+# (test_acceptance.py, RACK_COULOMB): 1.47x the floor with the true
+# parameters here, 1.53x after the two rounds; a third round adds the
+# structure for reversals (a compliance at the mesh, the friction creeping
+# behind it) and reaches 1.06x. Was a strict expected failure.
+RACK_COULOMB_STRUCTURE = ("compliance",)
 
 
 def _record(block: str, effect: str):
@@ -197,6 +196,7 @@ def test_hidden_effect_ranked_fitted_to_the_noise_floor(block: str, effect: str)
     check_parameters(block, effect, result.model, record)
 
 
+#: (block, hidden effects, profile, the structure the rounds add as well)
 TWO_EFFECT_CASES = [
     ("simple_gear", ("sensor_delay", "coulomb_friction"), "rich", ()),
     ("rack_pinion", ("sensor_delay", "coulomb_friction"), "rich", RACK_COULOMB_STRUCTURE),
@@ -206,19 +206,18 @@ TWO_EFFECT_CASES = [
 
 
 @pytest.mark.parametrize(
-    "block,effects,profile",
-    [
-        pytest.param(b, e, p, id=f"{b}-{'+'.join(e)}", marks=marks)
-        for b, e, p, marks in TWO_EFFECT_CASES
-    ],
+    "block,effects,profile,structure",
+    [pytest.param(b, e, p, x, id=f"{b}-{'+'.join(e)}") for b, e, p, x in TWO_EFFECT_CASES],
 )
 def test_two_rounds_find_both_hidden_effects(
-    block: str, effects: tuple[str, str], profile: str
+    block: str, effects: tuple[str, str], profile: str, structure: tuple[str, ...]
 ) -> None:
     record = generate(block, effects, profile=profile)
-    rounds = run_rounds(gearsim_model(block), record.measurement, rounds=2)
-    found = [r.effect for r in rounds[1:]]
-    assert sorted(found) == sorted(effects), found
+    rounds = run_rounds(
+        gearsim_model(block), record.measurement, rounds=len(effects) + len(structure)
+    )
+    found = [r.effect for r in rounds[1:] if r.effect != REFIT]
+    assert sorted(found) == sorted(effects + structure), found
     floor = noise_floor(record)
     after = rounds[-1].fit.validation_nrmse_after
     assert after <= FLOOR_FACTOR * floor, f"{after / floor:.2f}x the noise floor"
@@ -230,9 +229,16 @@ def test_two_rounds_find_both_hidden_effects(
         # structural lag of test_acceptance.py: the delay fitted next to the
         # friction lands 1.42 ms short on the gear (4.98 ms, the same with
         # the true Coulomb level given), while the same fit on the record
-        # without the delay gives +0.35 ms. Within 1.5 ms, short side
+        # without the delay gives +0.35 ms. Within 1.5 ms, short side. With
+        # the structure for reversals in the model the lag is the model's
+        # own, and the delay and the creep trade off over a sample: 7.06 ms
+        # on the rack; within one sample (1 ms) either side
         delay = BEYOND_SEED_TRUTHS[block]["sensor_delay"]["torque_delay_s"]
-        assert delay - 1.5e-3 <= mk.torque_delay(fitted) <= delay, mk.torque_delay(fitted)
+        got = mk.torque_delay(fitted)
+        if structure:
+            assert abs(got - delay) <= 1e-3, got
+        else:
+            assert delay - 1.5e-3 <= got <= delay, got
         # the compliant mesh smooths each reversal over a few ms: 5 %, as in
         # test_acceptance.py
         assert fr["load_coulomb_friction"] == pytest.approx(tr["load_coulomb_friction"], rel=0.05)

@@ -61,8 +61,10 @@ def test_backlash_next_to_viscous_from_a_short_gap():
     inputs = prepare_inputs(meas)
     c = compare(start, meas, inputs)
     ctx = build_context(start, meas, inputs, c.sim, c.regime_masks)
-    evidence = EFFECTS["backlash"].screen(ctx)
-    short = dataclasses.replace(evidence, gap_estimate=0.2e-3)
+    screening = EFFECTS["backlash"].screen(ctx)
+    short = dataclasses.replace(
+        screening, evidence=dataclasses.replace(screening.evidence, gap_estimate=0.2e-3)
+    )
     r = F.fit_effect(ctx, "backlash", screen_result=short)
     assert r.parameters["linear_backlash"] == pytest.approx(1e-3, rel=0.1)
     assert r.validation_nrmse_after < 0.5 * r.validation_nrmse_before

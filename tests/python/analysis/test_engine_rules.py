@@ -30,7 +30,9 @@ def test_a_small_gain_is_judged_alike():
     gain = 1.0 - best.nrmse_after / d.baseline_nrmse
     assert 0.02 < gain < 0.10, gain  # the band where the old rules disagreed
     assert best.helps and d.best_helps
-    assert best.helps == scoring.helps(best, d.validation_baseline_nrmse, d.baseline_score)
+    assert best.helps == scoring.helps(
+        best, d.validation_baseline_nrmse, d.baseline_score, d.baseline_nrmse
+    )
     assert d.conclusion.startswith("add load_offset")
     rounds = run_rounds(start, meas, rounds=1)
     assert [r.effect for r in rounds] == [None, "load_offset"]

@@ -48,8 +48,17 @@ def test_bic_by_hand():
     # ((0.2)^2 + (0.4)^2 + (0.4)^2) / 3 = 0.12
     assert mse == pytest.approx(0.12)
     score = scoring.bic_score([0.12, 0.02], [3.0, 2.0], k=2)
-    expected = 3 * math.log(0.12) + 2 * math.log(0.02) + 2 * math.log(5.0)
+    # e_o = sqrt(0.12), sqrt(0.02); e = their mean; N = their n_eff weighted
+    # by e_o / sum(e_o)
+    e1, e2 = math.sqrt(0.12), math.sqrt(0.02)
+    n = (3.0 * e1 + 2.0 * e2) / (e1 + e2)
+    expected = n * math.log(((e1 + e2) / 2) ** 2) + 2 * math.log(n)
     assert score == pytest.approx(expected)
+    # an output whose error is a millionth of the other's barely counts: the
+    # score follows the contract's nrmse, not the log of every output's error
+    tiny = scoring.bic_score([0.01, 1e-12], [100.0, 3000.0], k=0)
+    smaller = scoring.bic_score([0.01, 0.5e-12], [100.0, 3000.0], k=0)
+    assert abs(tiny - smaller) < 0.1 * scoring.TIE_SCORE
 
 
 @dataclass

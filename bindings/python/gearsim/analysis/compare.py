@@ -11,6 +11,7 @@ import numpy as np
 from .measurement import Measurement
 from .metrics import OutputMetrics, output_metrics
 from .regimes import FAILING_RATIO, Regime, regime_errors, segment
+from .signals import noise_rms
 from .simulate import Inputs, Simulation, prepare_inputs, simulate
 
 __all__ = ["CompareResult", "compare"]
@@ -87,5 +88,6 @@ def compare(
         temp = None if meas.has_temperature else sim.signals.get("temperature")
         masks = segment(meas, temperature=temp)
         res = {o: meas[o] - sim.outputs[o] for o in meas.spec.outputs}
-        reg = regime_errors(masks, res, {o: m.std for o, m in outs.items()})
+        noise = {o: noise_rms(meas[o], 1.0 / meas.dt) for o in meas.spec.outputs}
+        reg = regime_errors(masks, res, {o: m.std for o, m in outs.items()}, noise)
     return CompareResult(model, meas, inputs, sim, outs, nr, reg, masks)

@@ -30,13 +30,14 @@ from typing import Any
 
 from . import scoring
 from .compare import CompareResult, compare
-from .effects import Effect, applicable_effects, coestimated, nuisance_columns
+from .effects import Effect, Screening, applicable_effects, coestimated, nuisance_columns
 from .fitting import FitResult, fit_effect
 from .identifiability import tie_warning
 from .measurement import Measurement
 from .regimes import FAILING_RATIO
 from .signatures import Context, build_context, screen
 from .simulate import Inputs, prepare_inputs
+from .threads import single_blas_thread
 
 __all__ = ["Candidate", "DiagnoseResult", "diagnose", "NOTHING_HELPS"]
 
@@ -68,6 +69,8 @@ class Candidate:
     judged_mse: dict[str, float] = field(default_factory=dict)
     helps: bool = False
     tied_with: list[str] = field(default_factory=list)
+    #: the candidates it contains as a special case (Effect.nests)
+    nests: tuple[str, ...] = ()
 
     @property
     def warnings(self) -> list[dict]:
@@ -174,7 +177,7 @@ class DiagnoseResult:
 @dataclass
 class _Screened:
     effect: Effect
-    result: Any
+    result: Screening
     predicted: float
     evidence: dict[str, Any]
     ruled_out: str | None
@@ -185,20 +188,23 @@ def _screen_all(ctx: Context, effects: list[Effect], nuisance_nrmse: float) -> l
     out = []
     for eff in effects:
         sr = eff.screen(ctx)
-        why = eff.ruled_out(ctx, sr)
+        why = sr.ruled_out
         ev = eff.evidence(ctx, sr)
         if why:
             ev["ruled_out"] = why
             ev["text"] = f"{ev.get('text', '')} (not fitted: {why})".strip()
-        pred = nuisance_nrmse if why else eff.predicted_nrmse(ctx, sr)
+        pred = nuisance_nrmse if why else float(sr.predicted_nrmse)
         out.append(_Screened(eff, sr, pred, ev, why))
     return sorted(out, key=lambda s: s.predicted)
 
 
-def _worth_fitting(screened: list[_Screened], nuisance_nrmse: float, top: int | None) -> set[str]:
+def _worth_fitting(
+    screened: list[_Screened], nuisance_nrmse: float, top: int | None, model: Any = None
+) -> set[str]:
     """The candidates to fit, among those not ruled out (in screening order).
     With `top`: the first `top`. Without: the first ALWAYS_FIT, every cheap
-    one (one parameter and no contact: a few fast simulations), and every other
+    one (one parameter and no contact or spring, in it or in the model: a few
+    fast simulations), and every other
     one whose screening predicts an error at least HELP_MARGIN below
     re-estimating the present parameters alone. A costly fit (several
     parameters, or contact) is as long as the whole screening, and one that
@@ -213,12 +219,20 @@ def _worth_fitting(screened: list[_Screened], nuisance_nrmse: float, top: int | 
     return {
         s.effect.name
         for i, s in enumerate(not_ruled_out)
-        if i < ALWAYS_FIT or _cheap_fit(s.effect) or s.predicted <= gain_needed
+        if i < ALWAYS_FIT or _cheap_fit(s.effect, model) or s.predicted <= gain_needed
     }
 
 
-def _cheap_fit(effect: Effect) -> bool:
-    return effect.n_params == 1 and not effect.costly
+def _cheap_fit(effect: Effect, model: Any) -> bool:
+    """One parameter and no contact or spring to sub-step, in the candidate
+    and in the model: a few fast simulations."""
+    return effect.n_params == 1 and not effect.costly and not _costly_model(model)
+
+
+def _costly_model(model: Any) -> bool:
+    from .effects import present_effects
+
+    return model is not None and any(e.costly for e in present_effects(model))
 
 
 def _fit_candidates(
@@ -237,7 +251,7 @@ def _fit_candidates(
     (_screening_underreads), the rest too. Returns the fitted ones by name."""
     if not fit:
         return {}
-    chosen = _worth_fitting(screened, nuisance_nrmse, top)
+    chosen = _worth_fitting(screened, nuisance_nrmse, top, ctx.model)
     out: dict[str, Candidate] = {}
 
     def fit_all(names: set[str]) -> None:
@@ -308,7 +322,8 @@ def _screening_candidate(ctx: Context, s: _Screened, split: scoring.ValidationSp
     """A candidate judged on screening alone: its errors and score are
     estimates from the linear regression, not from a simulation."""
     torque, speed = ctx.torque_output, ctx.speed_output
-    tn = getattr(s.result, "torque_nrmse", ctx.base_nrmse[torque])
+    reg = s.result.regression
+    tn = reg.torque_nrmse if reg is not None else ctx.base_nrmse[torque]
     mse = {
         torque: float(tn) ** 2,
         speed: scoring.normalized_mse(ctx.residual[speed], ctx.std[speed], split.validation),
@@ -326,6 +341,7 @@ def _screening_candidate(ctx: Context, s: _Screened, split: scoring.ValidationSp
         validation_nrmse_after=s.predicted,
         n_parameters=k,
         judged_mse=mse,
+        nests=s.effect.nests,
     )
 
 
@@ -343,23 +359,29 @@ def _fitted_candidate(
             s.effect.name,
             screen_result=s.result,
             max_nfev=20 * (s.effect.n_params + 2),
+            ranking=True,
             validation=split,
         )
     except Exception as exc:  # a candidate that cannot be fitted is reported, not fatal
         notes.append(f"{s.effect.name}: fit failed ({exc}); screening estimate kept")
         return None
+    try:  # the evidence again, now quoting the fitted parameters
+        evidence = s.effect.evidence(ctx, s.result, fr.model)
+    except Exception:  # noqa: BLE001 - the screening's evidence stays
+        evidence = s.evidence
     return Candidate(
         s.effect.name,
         fr.nrmse_after,
         fr.parameters,
         "fit",
-        s.evidence,
+        evidence,
         float("nan"),
         s.predicted,
         fr,
         validation_nrmse_after=fr.validation_nrmse_after,
         n_parameters=fr.n_parameters,
         judged_mse=dict(fr.judged_mse),
+        nests=s.effect.nests,
     )
 
 
@@ -411,6 +433,8 @@ def _warnings(ranked: list[Candidate]) -> list[dict]:
             continue
         for other in c.tied_with:
             pair = frozenset((c.effect, other))
+            if not by_name[other].helps:
+                continue  # a tie with a candidate that would not be added is no choice
             if pair not in seen:
                 seen.add(pair)
                 out.append(tie_warning(c, by_name[other]))
@@ -419,6 +443,7 @@ def _warnings(ranked: list[Candidate]) -> list[dict]:
     return out
 
 
+@single_blas_thread
 def diagnose(
     model: Any,
     meas: Measurement,
@@ -456,7 +481,7 @@ def diagnose(
     tie = scoring.tie_relative(sum(n_eff.values()))
     ranked = scoring.order_candidates(cands, tie)
     for c in ranked:
-        c.helps = scoring.helps(c, base_val, baseline_score)
+        c.helps = scoring.helps(c, base_val, baseline_score, base.nrmse)
     return DiagnoseResult(
         base,
         ctx,

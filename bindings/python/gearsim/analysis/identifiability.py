@@ -8,11 +8,17 @@ one separates them. Kinds:
 - ``coestimate_moved``: a co-estimated parameter moved more than
   ``MOVE_LIMIT`` (relative) from its value in the starting model: the new
   effect may be absorbing it, or it absorbing the effect;
-- ``correlated``: two fitted parameters correlate with |r| > ``CORRELATION_LIMIT``
-  (from the Jacobian at the solution, cov ~ (J^T J)^-1);
+- ``not_identifiable``: a combination of fitted parameters the record cannot
+  determine (a direction of the scaled Jacobian whose standard deviation
+  exceeds its own size, or whose singular value is zero): the parameters are
+  named, get no standard deviation, and the excitation that would separate
+  them is given; never reported as a correlation of 1.000 with a tiny std;
+- ``correlated``: two identifiable parameters correlate with |r| >
+  ``CORRELATION_LIMIT`` (from the Jacobian at the solution);
 - ``at_bound``: a parameter ended at a bound of its range;
 - ``tie``: two effects explain the data equally (scoring.within_noise);
-- ``singular``, ``not_converged``, ``no_gain``: the fit itself;
+- ``not_converged``, ``no_gain`` (the validation or the whole record's error
+  did not fall: not accepted): the fit itself;
 - ``negligible``: the effect as fitted is below what the record can claim
   (Effect.negligible; such a candidate does not help).
 """
@@ -31,6 +37,8 @@ __all__ = [
     "CORRELATION_LIMIT",
     "correlation_matrix",
     "parameter_warnings",
+    "correlated_warnings",
+    "unidentifiable_warning",
     "tie_warning",
     "warning",
 ]
@@ -89,6 +97,36 @@ def _at_bound(p: FitParam, value: float, active: int, scale: float) -> dict[str,
     )
 
 
+def unidentifiable_warning(params: Sequence[FitParam], effect: str) -> dict[str, Any]:
+    """The parameters of one direction the record cannot determine, and the
+    excitation that would separate them."""
+    owners = list(dict.fromkeys(p.owner or effect for p in params))
+    if len(owners) >= 2:
+        how = separating_excitation(owners[0], owners[1])
+    else:
+        how = separating_excitation(owners[0], owners[0])
+    names = [p.name for p in params]
+    if len(names) == 1:
+        what = f"{names[0]} changes the error too little to be determined"
+    else:
+        what = (
+            f"{', '.join(names[:-1])} and {names[-1]} can move together without changing the error"
+        )
+    return warning(
+        "not_identifiable",
+        f"not identifiable from this record: {what}; the values are where the fit stopped, "
+        f"not measurements; to separate them: {how}",
+        parameters=names,
+        effects=sorted(set(owners)),
+        excitation=how,
+    )
+
+
+def correlated_warnings(params: Sequence[FitParam], corr: np.ndarray, effect: str) -> list[dict]:
+    """Pairs of identifiable parameters correlated above CORRELATION_LIMIT."""
+    return _correlated(params, corr, effect)
+
+
 def _correlated(params: Sequence[FitParam], corr: np.ndarray, effect: str) -> list[dict]:
     out = []
     for i in range(len(params)):
@@ -116,14 +154,13 @@ def _correlated(params: Sequence[FitParam], corr: np.ndarray, effect: str) -> li
 def parameter_warnings(
     params: Sequence[FitParam],
     x: np.ndarray,
-    corr: np.ndarray,
     active: np.ndarray,
     scales: np.ndarray,
     effect: str,
 ) -> list[dict[str, Any]]:
-    """Bound, co-estimate and correlation warnings of one fit. For a moved
-    co-estimated parameter, the excitation that separates its owner from the
-    new effect is added."""
+    """Bound and co-estimate warnings of one fit. For a moved co-estimated
+    parameter, the excitation that separates its owner from the new effect
+    is added."""
     out: list[dict[str, Any]] = []
     for i, p in enumerate(params):
         w = _at_bound(p, float(x[i]), int(active[i]), float(scales[i]))
@@ -136,7 +173,7 @@ def parameter_warnings(
             w["effects"] = sorted({p.owner, effect})
             w["excitation"] = how
             out.append(w)
-    return out + _correlated(params, corr, effect)
+    return out
 
 
 def tie_warning(a: Any, b: Any) -> dict[str, Any]:

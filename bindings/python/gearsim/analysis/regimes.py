@@ -25,7 +25,9 @@ between reversals, clamped to [5 samples, 0.2 s].
 The error in a regime is ``rms(residual in regime) / std(measured output)``
 (the same normalisation as the overall nrmse, so the numbers compare), and the
 ratio to the overall rms residual. A regime is *failing* when that ratio is
-at least 1.5 and it holds at least 1 % of the samples.
+at least 1.5, the error in it is at least 1.5 times the output's noise floor
+(the rms of the measurement's own broadband noise, signals.noise_rms), and
+it holds at least 1 % of the samples.
 """
 
 from __future__ import annotations
@@ -178,13 +180,21 @@ def segment(meas: Measurement, temperature: np.ndarray | None = None) -> list[Re
 
 
 def regime_errors(
-    regimes: list[Regime], residuals: dict[str, np.ndarray], scales: dict[str, float]
+    regimes: list[Regime],
+    residuals: dict[str, np.ndarray],
+    scales: dict[str, float],
+    noise: dict[str, float] | None = None,
 ) -> list[dict]:
     """Per regime: fraction of samples, and per output the regime nrmse
     (rms of the residual in the regime / std of the measured output) and its
     ratio to the overall rms residual; `failing` marks the regimes where some
-    output's ratio is >= FAILING_RATIO (and the regime holds >= 1 % of samples)."""
+    output's ratio is >= FAILING_RATIO while its error there is also at least
+    FAILING_RATIO times the output's noise floor (noise: the rms of the
+    measurement's own noise per output, signals.noise_rms; an error at the
+    noise or the quantization level fails nothing), and the regime holds
+    >= 1 % of samples."""
     out = []
+    noise = noise or {}
     overall = {k: float(np.sqrt(np.mean(r * r))) for k, r in residuals.items()}
     for reg in regimes:
         m = reg.mask
@@ -196,6 +206,7 @@ def regime_errors(
             "outputs": {},
         }
         worst = 0.0
+        fails = False
         for k, r in residuals.items():
             if m.any():
                 e = float(np.sqrt(np.mean(r[m] ** 2)))
@@ -204,14 +215,20 @@ def regime_errors(
                 e, mean = float("nan"), float("nan")
             s = scales.get(k, 0.0)
             ratio = e / overall[k] if overall[k] > 0 and m.any() else float("nan")
+            floor = float(noise.get(k, 0.0))
+            above = bool(np.isfinite(e) and e >= FAILING_RATIO * floor)
             entry["outputs"][k] = {
                 "nrmse": e / s if s > 0 else float("nan"),
                 "ratio": ratio,
                 "bias": mean / s if s > 0 else float("nan"),
+                "noise_floor": floor / s if s > 0 else float("nan"),
+                "above_noise": above,
             }
             if np.isfinite(ratio):
                 worst = max(worst, ratio)
+                if ratio >= FAILING_RATIO and above:
+                    fails = True
         entry["worst_ratio"] = worst
-        entry["failing"] = bool(worst >= FAILING_RATIO and reg.fraction >= 0.01)
+        entry["failing"] = bool(fails and reg.fraction >= 0.01)
         out.append(entry)
     return out

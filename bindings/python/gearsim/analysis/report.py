@@ -12,10 +12,11 @@ Figures:
 - ``error_fall.png``: nrmse on the estimation and on the validation blocks
   after each round of adding an effect;
 - ``signatures.png``: the signature plot of each effect class that draws one
-  (Effect.plot: residual spectrum, residual against speed or angle, the
-  residual/derivative cross-correlation against lag), for the effects that
-  were added or among a diagnosis's first candidates or helped, drawn on the
-  residual of the round that diagnosed them.
+  (Effect.plot: the transient after reversals, residual against speed or
+  angle, the residual/derivative cross-correlation against lag), for the
+  effects that were added (labelled with the round that added them) and,
+  labelled "not added", those a diagnosis found helpful or listed among its
+  first candidates, drawn on the residual of the round that diagnosed them.
 """
 
 from __future__ import annotations
@@ -34,10 +35,12 @@ from .._outputs import OutputPathError, atomic_write_bytes, atomic_write_text, p
 from . import scoring
 from .compare import CompareResult, compare
 from .diagnose import DiagnoseResult, diagnose
-from .fitting import FitResult, fit_effect, validation_nrmse
+from .fitting import REFIT, FitResult, fit_effect, refit_effects, validation_nrmse
 from .measurement import Measurement
 from .regimes import FAILING_RATIO
+from .signatures import build_context
 from .simulate import prepare_inputs
+from .threads import single_blas_thread
 
 __all__ = ["Round", "run_rounds", "write_report", "FIGURES"]
 
@@ -78,13 +81,18 @@ def _round(model: Any, effect: str | None, cur: CompareResult, split, fit=None) 
 
 def _full_fit(d: DiagnoseResult, split, say: Callable[[str], None]) -> FitResult:
     """The accepted candidate's fit: diagnose's own when it fitted every
-    parameter, else a full fit (optional parameters too) on the same split."""
+    parameter at full resolution, else a full fit on the same split (kept
+    unless its validation error ends above diagnose's)."""
     best = d.best
     if best.fit is not None and best.fit.complete:
         return best.fit
-    return fit_effect(d.context, best.effect, validation=split, progress=say)
+    full = fit_effect(d.context, best.effect, validation=split, progress=say)
+    if best.fit is None or full.validation_nrmse_after <= best.fit.validation_nrmse_after:
+        return full
+    return best.fit  # the full search ended worse than the ranking fit (a local minimum)
 
 
+@single_blas_thread
 def run_rounds(
     model: Any,
     meas: Measurement,
@@ -98,8 +106,12 @@ def run_rounds(
     """Start from model; each round diagnoses and adds the best candidate
     when it helps (gearsim.analysis.scoring.helps, the rule diagnose reports
     with), then compares again. Stops when nothing helps or after `rounds`
-    rounds. The last model's diagnosis (if any) is kept on its round: its
-    conclusion says why the rounds stopped."""
+    rounds. The last diagnosed model's diagnosis is kept on its round: its
+    conclusion says why the rounds stopped. When two effects or more were
+    added, a final round re-fits them all together
+    (gearsim.analysis.fitting.refit_effects; each was fitted with the ones
+    before it, the later ones absent) and is kept when it lowers both the
+    validation error and the whole record's (effect REFIT)."""
     say = progress or (lambda s: None)
     inputs = prepare_inputs(meas, input_filter)
     split = scoring.split_record(meas.n, validation, validation_fraction)
@@ -126,7 +138,22 @@ def run_rounds(
             f"round {k}: + {fr.effect}: validation nrmse {out[-2].validation_nrmse:.4f} -> "
             f"{out[-1].validation_nrmse:.4f}"
         )
+    if len(out) >= 3:
+        last = out[-1].compare
+        ctx = build_context(last.model, meas, inputs, last.sim, last.regime_masks)
+        rf = refit_effects(ctx, validation=split, progress=say)
+        say(f"final round: {rf.verdict}")
+        if rf.accepted:
+            out.append(_round(rf.model, REFIT, compare(rf.model, meas, inputs), split, rf))
     return out
+
+
+def conclusion(rounds: list[Round]) -> str | None:
+    """The conclusion of the last diagnosis of the rounds (why they stopped)."""
+    for r in reversed(rounds):
+        if r.diagnosis is not None:
+            return r.diagnosis.conclusion
+    return None
 
 
 # ---------------------------------------------------------------- drawing
@@ -341,13 +368,14 @@ def _fig_error_fall(plt, meas: Measurement, rounds: list[Round]):
     return fig
 
 
-def _signature_cases(rounds: list[Round]) -> list[tuple[Any, Any]]:
-    """(effect, context) of each effect to draw: the first round whose
-    diagnosis added it, listed it among its first candidates, or found
-    that it helps; drawn on that diagnosis's baseline residual."""
+def _signature_cases(rounds: list[Round]) -> list[tuple[Any, Any, str]]:
+    """(effect, context, label) of each effect to draw: every effect added
+    (drawn on the residual of the round that diagnosed it, labelled with the
+    round that added it), then those a diagnosis found helpful or listed
+    among its first candidates without adding them (labelled "not added")."""
     from .effects import EFFECTS
 
-    added = {r.effect for r in rounds if r.effect}
+    added_in = {r.effect: k for k, r in enumerate(rounds) if r.effect}
     cases: dict[str, Any] = {}
     for r in rounds:
         d = r.diagnosis
@@ -357,9 +385,12 @@ def _signature_cases(rounds: list[Round]) -> list[tuple[Any, Any]]:
             eff = EFFECTS.get(c.effect)
             if eff is None or eff.plot is None or c.effect in cases:
                 continue
-            if c.effect in added or c.helps or i < SHOWN_CANDIDATES:
-                cases[c.effect] = (eff, d.context)
-    return list(cases.values())
+            if c.effect in added_in:
+                cases[c.effect] = (eff, d.context, f"added in round {added_in[c.effect]}")
+            elif c.helps or i < SHOWN_CANDIDATES:
+                cases[c.effect] = (eff, d.context, "not added")
+    ordered = sorted(cases.values(), key=lambda c: c[2] == "not added")
+    return ordered
 
 
 def _fig_signatures(plt, meas: Measurement, rounds: list[Round]):
@@ -371,11 +402,16 @@ def _fig_signatures(plt, meas: Measurement, rounds: list[Round]):
         ax.axis("off")
     if not cases:
         axes[0, 0].text(0.02, 0.5, "no candidate with a signature plot", fontsize=10)
-    for ax, (eff, ctx) in zip(axes.ravel(), cases, strict=False):
+    for ax, (eff, ctx, label) in zip(axes.ravel(), cases, strict=False):
         eff.plot(ctx, ax)
         ax.grid(alpha=0.3)
-        ax.title.set_fontsize(9)
-    fig.suptitle("signatures of the effects diagnosed (on the residual of their round)")
+        ax.set_title(f"[{label}] {ax.get_title()}", fontsize=9)
+        if label == "not added":
+            ax.set_facecolor("#f4f4f4")
+    fig.suptitle(
+        "signatures of the effects diagnosed, on the residual of their round "
+        "(labelled: added in round k, or not added)"
+    )
     fig.tight_layout()
     return fig
 
@@ -486,7 +522,7 @@ def _rounds_table(meas: Measurement, rounds: list[Round]) -> str:
             + f"<td>{_num(100 * (1 - r.compare.nrmse), '.2f')}</td></tr>"
         )
     h.append("</table>")
-    last = rounds[-1].diagnosis
+    last = next((r.diagnosis for r in reversed(rounds) if r.diagnosis is not None), None)
     if last is not None and not last.best_helps:
         h.append(f"<p><b>{_e(last.conclusion)}</b></p>")
     return "".join(h)

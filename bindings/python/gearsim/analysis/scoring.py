@@ -9,20 +9,31 @@ the first block (the start-up transient) is always used for estimation
 simulation always runs open loop over the whole record, so only which
 residual samples count differs (no re-initialisation at block edges).
 
-**Score.** A Bayesian information criterion computed on the held-out
-validation blocks (on the whole record with validation off), per output o
-with its own noise level:
+**Score.** A Bayesian information criterion of the contract's error measure
+computed on the held-out validation blocks (on the whole record with
+validation off):
 
-    score = sum_o n_eff,o ln(mse_o) + k ln(sum_o n_eff,o)
+    score = N ln(e^2) + k ln(N)
 
-mse_o: mean of ((measured - simulated) / std(measured))^2 over the validation
-samples; k: the number of parameters fitted (the effect's and the co-estimated
-ones). The validation error rewards what predicts data the fit never saw; the
-k ln(n) term still makes an extra parameter pay for itself. Residuals of a rig
-are correlated in time, so a sample is not an independent observation:
-n_eff,o = n (1 - rho_o) / (1 + rho_o) with rho_o the lag-1 autocorrelation of
-the residual (of the best-fitting candidate, the one closest to the noise),
-clamped to [0, 0.999]. Lower is better.
+e: the overall validation nrmse, the mean over the outputs o of
+e_o = sqrt(mse_o), mse_o the mean of ((measured - simulated) / std(measured))^2
+over the validation samples; k: the number of parameters fitted (the
+effect's and the co-estimated ones); N: the effective number of independent
+samples, sum_o w_o n_eff,o with w_o = e_o / sum e_o, each output counted by
+its share of the error. The validation error rewards what predicts data the
+fit never saw; the k ln(N) term still makes an extra parameter pay for
+itself. Residuals of a rig are correlated in time, so a sample is not an
+independent observation: n_eff,o = n (1 - rho_o) / (1 + rho_o) with rho_o the
+lag-1 autocorrelation of the residual (of the best-fitting candidate, the one
+closest to the noise), clamped to [0, 0.999]. Lower is better. (A score that
+summed each output's log error would let an output whose error is a
+millionth of its spread, a driven speed that is pure kinematics, rank the
+candidates by changes no reader of the nrmse could see.)
+
+**Nested candidates.** A candidate that contains another as a special case
+(Effect.nests) is ranked above it only when it beats it clearly: a score
+lower by more than ``TIE_SCORE`` and a validation error lower by more than
+the noise (:func:`beats_nested`). Otherwise the simpler one comes first.
 
 **Tie.** Two candidates are within the noise of each other when their scores
 differ by less than ``TIE_SCORE`` or their validation errors by less than
@@ -35,9 +46,10 @@ are swapped until the one with fewer parameters comes first.
 
 **Stopping rule** (:func:`helps`, shared by diagnose and report): an effect
 helps when it was fitted, it lowers the validation error by at least
-``HELP_MARGIN`` (relative), its score is lower than the baseline's, and its
-fit has no ``negligible`` warning (the effect class judged the fitted size
-below what the record can claim, e.g. a delay under 1.5 samples).
+``HELP_MARGIN`` (relative) and the whole record's error, its score is lower
+than the baseline's, and its fit has no ``negligible`` or ``inconsistent``
+warning (the effect class judged the fitted size below what the record can
+claim, or the residual contradicts the effect as fitted).
 """
 
 from __future__ import annotations
@@ -73,6 +85,10 @@ TIE_SCORE = 2.0
 TIE_RELATIVE = 0.03
 HELP_MARGIN = 0.02
 RHO_MAX = 0.999
+#: warning kinds that keep a fitted candidate from helping: the effect
+#: judged the fitted size below what the record can claim, or the residual
+#: contradicts the fitted effect
+REFUSED = ("negligible", "inconsistent")
 
 
 @dataclass(frozen=True)
@@ -147,9 +163,18 @@ def normalized_mse(residual: np.ndarray, scale: float, mask: np.ndarray) -> floa
 
 
 def bic_score(mse: Sequence[float], n_eff: Sequence[float], k: int) -> float:
-    """sum_o n_eff,o ln(mse_o) + k ln(sum_o n_eff,o)."""
-    data = sum(n * math.log(max(m, 1e-300)) for m, n in zip(mse, n_eff, strict=True))
-    return float(data + k * math.log(max(sum(n_eff), 1.0)))
+    """N ln(e^2) + k ln(N): e the contract's overall error on the judged
+    samples, the mean over the outputs of sqrt(mse_o); N the effective
+    samples of the outputs weighted by their share of e (module docstring)."""
+    e_o = [math.sqrt(max(m, 0.0)) for m in mse]
+    e = sum(e_o) / max(len(e_o), 1)
+    total = sum(e_o)
+    if total > 0:
+        n = sum(w * x for w, x in zip(e_o, n_eff, strict=True)) / total
+    else:
+        n = sum(n_eff) / max(len(n_eff), 1)
+    n = max(n, 1.0)
+    return float(n * math.log(max(e * e, 1e-300)) + k * math.log(n))
 
 
 def tie_relative(n_eff_total: float) -> float:
@@ -170,11 +195,40 @@ def within_noise(a: Any, b: Any, relative: float = TIE_RELATIVE) -> bool:
     return abs(va - vb) <= relative * min(va, vb)
 
 
+def beats_nested(general: Any, special: Any, relative: float = TIE_RELATIVE) -> bool:
+    """A candidate that contains another as a special case (its .nests names
+    it) is preferred only when it beats it clearly: a lower score by more
+    than TIE_SCORE and a validation error lower by more than the noise."""
+    if not general.score < special.score - TIE_SCORE:
+        return False
+    va, vb = general.validation_nrmse_after, special.validation_nrmse_after
+    if va is None or vb is None or not (np.isfinite(va) and np.isfinite(vb)):
+        return False
+    return bool(va < (1.0 - relative) * vb)
+
+
+def _nested_first(fitted: list[Any], relative: float) -> bool:
+    """Move a nested (simpler) candidate above the first more general one
+    that does not beat it clearly; True when something moved."""
+    for i, general in enumerate(fitted):
+        for j in range(i + 1, len(fitted)):
+            special = fitted[j]
+            if special.effect in getattr(general, "nests", ()) and not beats_nested(
+                general, special, relative
+            ):
+                fitted.insert(i, fitted.pop(j))
+                return True
+    return False
+
+
 def order_candidates(cands: list[Any], relative: float = TIE_RELATIVE) -> list[Any]:
     """Fitted candidates by score, then screening estimates by score. Then,
     repeatedly, a neighbour pair within the noise of each other is swapped
-    when the later one has fewer parameters (the simpler one first). Sets
-    .tied_with on each fitted candidate (the fitted ones within its noise)."""
+    when the later one has fewer parameters (the simpler one first), and a
+    candidate that nests another (a load- or temperature-dependent
+    efficiency a constant one, Stribeck friction a Coulomb one) goes below it
+    unless it beats it clearly (beats_nested). Sets .tied_with on each
+    fitted candidate (the fitted ones within its noise)."""
     fitted = sorted((c for c in cands if c.method == "fit"), key=lambda c: c.score)
     screened = sorted((c for c in cands if c.method != "fit"), key=lambda c: c.score)
     swapped = True
@@ -185,6 +239,9 @@ def order_candidates(cands: list[Any], relative: float = TIE_RELATIVE) -> list[A
             if b.n_parameters < a.n_parameters and within_noise(a, b, relative):
                 fitted[i], fitted[i + 1] = b, a
                 swapped = True
+    for _ in range(len(fitted) ** 2):
+        if not _nested_first(fitted, relative):
+            break
     for c in fitted:
         c.tied_with = [o.effect for o in fitted if o is not c and within_noise(c, o, relative)]
     for c in screened:
@@ -192,12 +249,22 @@ def order_candidates(cands: list[Any], relative: float = TIE_RELATIVE) -> list[A
     return fitted + screened
 
 
-def helps(candidate: Any, baseline_validation_nrmse: float, baseline_score: float) -> bool:
-    """The one stopping rule of diagnose and report (module docstring)."""
+def helps(
+    candidate: Any,
+    baseline_validation_nrmse: float,
+    baseline_score: float,
+    baseline_nrmse: float | None = None,
+) -> bool:
+    """The one stopping rule of diagnose and report (module docstring).
+    baseline_nrmse: the whole record's error before; the candidate must
+    lower it too (an effect that helps the held-out blocks while the whole
+    record gets worse is not accepted)."""
     if candidate is None or candidate.method != "fit":
         return False
-    if any(w.get("kind") == "negligible" for w in getattr(candidate, "warnings", ())):
-        return False  # the effect says the record cannot claim it at the size fitted
+    if baseline_nrmse is not None and not candidate.nrmse_after < baseline_nrmse:
+        return False
+    if any(w.get("kind") in REFUSED for w in getattr(candidate, "warnings", ())):
+        return False  # the effect says the record cannot claim it, or contradicts it
     after = candidate.validation_nrmse_after
     if after is None or not np.isfinite(after):
         return False

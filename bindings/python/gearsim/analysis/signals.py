@@ -97,6 +97,21 @@ def _psd(x: np.ndarray, fs_hz: float, nseg: int = 1024) -> tuple[np.ndarray, np.
     return np.fft.rfftfreq(nseg, d=1.0 / fs_hz), p
 
 
+def noise_rms(x: np.ndarray, fs_hz: float) -> float:
+    """The rms of the broadband noise in a measured signal: the median
+    density of its upper half band (where a rig's physics has little power)
+    taken as white over the whole band, sigma^2 = median(P)/sum(w^2) for the
+    Hann-windowed periodogram of _psd. 0 for a record too short to tell."""
+    x = np.asarray(x, dtype=float)
+    if x.size < 64 or float(np.ptp(x)) == 0.0:
+        return 0.0
+    f, p = _psd(x, fs_hz)
+    nseg = 2 * (f.size - 1)
+    w2 = float(np.sum(np.hanning(nseg) ** 2))
+    upper = f >= 0.5 * f[-1]
+    return float(np.sqrt(max(float(np.median(p[upper])), 0.0) / w2))
+
+
 #: density above the high-band floor that still counts as signal, and the
 #: upper clamp (fraction of fs): for the rigid rig, which differentiates the
 #: speed, and for a backlash contact or a compliant shaft, which do not

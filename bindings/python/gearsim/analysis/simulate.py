@@ -19,6 +19,18 @@ a compliant base shaft gets the measured speed through a wider filter
 integrates the speed into a spring's deflection instead of differentiating
 it, so the impacts and the shaft's ring keep their fast content.
 
+No lag of our own (docs/analysis.md, "Timing"): the rig steps from sample
+to sample, its speed ramping linearly over each step, and reports torques as
+means over the step and speeds at its end. A record samples every channel at
+the same instants. So the rig is fed the (conditioned) speed half a sample
+ahead (:func:`half_sample`, cubic interpolation), which centres each step on
+a sample instant: its mean torque is the torque at that instant, its load is
+the sample's, and the speed-driven rigid rig evaluates its speed terms at the
+step's mean speed (rig ``base_speed_ramp``) and its acceleration as the
+centred difference; the driven speed, an end-of-step value, is taken back
+half a sample. A backlash contact is sub-stepped finely enough for its
+backward Euler not to damp the mesh mode (:data:`CONTACT_H_OMEGA`).
+
 Rig time (a CSV of ``gearsim hil to-csv`` whose first line says
 ``time_base=rig``, :attr:`Measurement.time_base`): the model is stepped as the
 rig was, every ``rig_dt`` seconds, ``steps_per_row`` steps per row, and
@@ -55,7 +67,18 @@ __all__ = [
     "simulate",
     "simulate_outputs",
     "delayed",
+    "half_sample",
+    "CONTACT_H_OMEGA",
+    "contact_substeps",
 ]
+
+#: h*omega_n of a backlash contact's sub-steps in the analysis: backward Euler
+#: damps a mode by about (h*omega_n)^2/2 per sub-step, so the rig's own
+#: automatic count (h*omega_n <= 0.5, stable but over-damped) would damp a
+#: mesh mode of a few percent of the sampling rate; the contact model of
+#: three external test records came within 1.07x of their noise floor at
+#: 0.03 and needed 1.3-1.6x at the automatic count (docs/analysis.md)
+CONTACT_H_OMEGA = 0.03
 
 
 @dataclass(frozen=True)
@@ -147,7 +170,9 @@ class Inputs:
     base shaft (integrates_drive_speed), when its conditioning differs from
     base_speed's (None: the same).
     rig_steps: how the rig was stepped over the rows (a rig-time CSV), or
-    None: the model is stepped once per row, at dt."""
+    None: the model is stepped once per row, at dt. held: the input columns
+    recorded as zero-order-hold staircases (fed as they are: what a rig
+    applied step by step, so the speed is not taken half a sample ahead)."""
 
     base_speed: np.ndarray
     load: np.ndarray
@@ -157,6 +182,7 @@ class Inputs:
     cutoffs: Mapping[str, float | None] = field(default_factory=dict)
     contact_speed: np.ndarray | None = None
     rig_steps: RigSteps | None = None
+    held: frozenset[str] = frozenset()
 
     def speed_for(self, model: Any) -> np.ndarray:
         """The base speed that drives `model`'s rig: contact_speed for a
@@ -180,6 +206,7 @@ class Inputs:
             self.cutoffs,
             s(self.contact_speed),
             None if self.rig_steps is None else self.rig_steps.slice(start, stop),
+            self.held,
         )
 
 
@@ -193,14 +220,20 @@ def prepare_inputs(meas: Measurement, input_filter: float | str | None = "auto")
     cutoffs: dict[str, float | None] = {}
     steps = rig_steps_of(meas)
     held_as_applied = set(steps.before) if steps is not None else set()
+    held: set[str] = set()
 
     def cond(name: str) -> np.ndarray:
         x = meas[name]
-        if input_filter is None or input_filter == "none" or name in held_as_applied:
+        if name in held_as_applied:
+            cutoffs[name] = None
+            held.add(name)
+            return x
+        if input_filter is None or input_filter == "none":
             cutoffs[name] = None
             return x
         if input_filter == "auto" and is_held(x):
             cutoffs[name] = None
+            held.add(name)
             return x
         fc = auto_cutoff(x, fs) if input_filter == "auto" else float(input_filter)
         if fc is None or fc >= 0.5 * fs:
@@ -220,7 +253,7 @@ def prepare_inputs(meas: Measurement, input_filter: float | str | None = "auto")
     load = cond(spec.load_input)
     temp = cond(TEMPERATURE.name) if meas.has_temperature else None
     amb = cond(AMBIENT_TEMPERATURE.name) if meas.has_ambient else None
-    return Inputs(speed, load, temp, amb, meas.dt, cutoffs, contact, steps)
+    return Inputs(speed, load, temp, amb, meas.dt, cutoffs, contact, steps, frozenset(held))
 
 
 @dataclass
@@ -250,18 +283,67 @@ _SIGNALS = (
 )
 
 
-def _run(model: Any, meas: Measurement, inputs: Inputs) -> tuple[Any, dict[str, np.ndarray]]:
+def _aligned(meas: Measurement, inputs: Inputs) -> bool:
+    """The rig's steps are centred on the samples (module docstring). Not for
+    a rig-time record, nor a speed held step by step: those are replayed as
+    the rig ran them."""
+    return inputs.rig_steps is None and meas.spec.speed_input not in inputs.held
+
+
+def half_sample(y: np.ndarray, direction: int) -> np.ndarray:
+    """y half a sample ahead (direction +1: y(t_k + dt/2)) or behind (-1:
+    y(t_k - dt/2)), by the cubic through the four nearest samples,
+    (-y[k-1] + 9 y[k] + 9 y[k+1] - y[k+2])/16, the ends extended by
+    reflection through the end values (exact for cubics away from the ends,
+    for straight lines everywhere)."""
+    y = np.asarray(y, dtype=float)
+    if y.size < 2:
+        return y.copy()
+    head = 2.0 * y[0] - y[2:0:-1] if y.size > 2 else 2.0 * y[0] - y[1:2].repeat(2)
+    tail = 2.0 * y[-1] - y[-2:-4:-1] if y.size > 2 else 2.0 * y[-1] - y[0:1].repeat(2)
+    p = np.concatenate([head, y, tail])  # p[i + 2] = y[i]
+    if direction > 0:
+        return (-p[1:-3] + 9.0 * p[2:-2] + 9.0 * p[3:-1] - p[4:]) / 16.0
+    return (-p[:-4] + 9.0 * p[1:-3] + 9.0 * p[2:-2] - p[3:-1]) / 16.0
+
+
+def contact_substeps(model: Any, dt: float, h_omega: float = CONTACT_H_OMEGA) -> int | None:
+    """The contact sub-steps for a model with backlash whose model leaves
+    the count to the rig (contact_substeps 0): the fewest with h*omega_n <=
+    h_omega (default CONTACT_H_OMEGA), at most the rig's 64; None otherwise
+    (the rig's own)."""
+    if not mk.block_values(model).get("backlash_enabled"):
+        return None
+    if int(mk.rig_values(model).get("contact_substeps", 0) or 0) > 0:
+        return None
+    info = model.rig(dt=dt).info
+    dt_omega = float(info["contact_substeps"]) * float(info["contact_h_omega_n"])
+    return int(min(64, max(1, np.ceil(dt_omega / h_omega))))
+
+
+def _run(
+    model: Any, meas: Measurement, inputs: Inputs, substeps: int | None = None
+) -> tuple[Any, dict[str, np.ndarray]]:
     """One batch run of the model's rig on the inputs: the RigResult, and the
-    two simulated outputs under their canonical names (one value per row)."""
+    two simulated outputs under their canonical names (one value per row).
+    substeps: the contact sub-steps of a backlash model (default:
+    contact_substeps)."""
     use_temperature = inputs.measured_temperature is not None
     steps = inputs.rig_steps
+    aligned = _aligned(meas, inputs)
     dt = inputs.dt if steps is None else steps.rig_dt
-    rig = model.rig(dt=dt, temperature_input=use_temperature)
+    overrides: dict[str, Any] = {"base_speed_ramp": True} if aligned else {}
+    if aligned:
+        n_sub = substeps if substeps is not None else contact_substeps(model, dt)
+        if n_sub:
+            overrides["contact_substeps"] = int(n_sub)
+    rig = model.rig(dt=dt, temperature_input=use_temperature, **overrides)
     # which rig input each column drives and which rig output each measured
     # output is compared with: gearsim.columns, shared with the HIL recording
     cols = meas.spec.columns
+    speed = inputs.speed_for(model)
     given = {
-        cols.speed_input: inputs.speed_for(model),
+        cols.speed_input: half_sample(speed, +1) if aligned else speed,
         cols.load_input: inputs.load,
         AMBIENT_TEMPERATURE: inputs.ambient_temperature,
         TEMPERATURE: inputs.measured_temperature,
@@ -275,6 +357,9 @@ def _run(model: Any, meas: Measurement, inputs: Inputs) -> tuple[Any, dict[str, 
         kw[str(col.rig_input)] = x
     res = rig.run(**kw)
     outputs = {col.name: _per_row(res, str(col.rig_output), steps) for col in cols.outputs}
+    if aligned:  # the driven speed is an end-of-step value: half a sample back
+        speed_out = meas.spec.speed_output
+        outputs[speed_out] = half_sample(outputs[speed_out], -1)
     delay = mk.torque_delay(model)
     if delay:
         torque = meas.spec.torque_output
@@ -310,9 +395,21 @@ def simulate(
     for name in signals:
         if getattr(res, name, None) is not None:
             sig[name] = _per_row(res, name, inputs.rig_steps)
+            if _aligned(meas, inputs) and name in _END_VALUES:
+                sig[name] = half_sample(sig[name], -1)
     return Simulation(outputs, sig)
 
 
-def simulate_outputs(model: Any, meas: Measurement, inputs: Inputs) -> dict[str, np.ndarray]:
-    """Only the two simulated outputs (the fitting loop's call)."""
-    return _run(model, meas, inputs)[1]
+#: the rig outputs that are values at the end of a step (the others are step
+#: means): taken back half a sample like the driven speed
+_END_VALUES = frozenset(
+    ("follower_speed", "base_speed", "temperature", "backlash_position", "follower_position")
+)
+
+
+def simulate_outputs(
+    model: Any, meas: Measurement, inputs: Inputs, substeps: int | None = None
+) -> dict[str, np.ndarray]:
+    """Only the two simulated outputs (the fitting loop's call; substeps:
+    a backlash contact's sub-steps held over a fit)."""
+    return _run(model, meas, inputs, substeps)[1]

@@ -130,17 +130,28 @@ def synthesize(
     path: str = "<synthetic>",
 ) -> Measurement:
     """Run model's rig on the clean excitation and return what imperfect
-    sensors would record, as a validated Measurement."""
+    sensors would record, as a validated Measurement. Every channel is
+    sampled at the same instants, as a logger samples a rig: the rig is
+    stepped as the analysis steps it (gearsim.analysis.simulate: each step
+    centred on a sample instant, the contact finely sub-stepped), so the
+    record carries no lag of the rig's own."""
+    from .simulate import contact_substeps, half_sample
+
     rng = np.random.default_rng(seed)
     block = mk.block_name(model)
     spec = RIG_SPECS[block]
     dt = float(exc.time[1] - exc.time[0])
     use_t = exc.temperature is not None
-    rig = model.rig(dt=dt, temperature_input=use_t)
-    kw = {"base_speed": exc.base_speed, "load": exc.load}
+    overrides: dict[str, Any] = {"base_speed_ramp": True}
+    n_sub = contact_substeps(model, dt)
+    if n_sub:
+        overrides["contact_substeps"] = n_sub
+    rig = model.rig(dt=dt, temperature_input=use_t, **overrides)
+    kw = {"base_speed": half_sample(exc.base_speed, +1), "load": exc.load}
     if use_t:
         kw["measured_temperature"] = exc.temperature
     out = rig.run(**kw)
+    follower_speed = half_sample(np.asarray(out.follower_speed), -1)
 
     def noisy(
         x: np.ndarray, q: float | None = None, offset: float = 0.0, noise: float = sensors.noise
@@ -160,7 +171,7 @@ def synthesize(
         spec.load_input: noisy(exc.load),
         spec.torque_output: noisy(np.asarray(out.base_torque), offset=sensors.torque_offset),
         spec.speed_output: noisy(
-            np.asarray(out.follower_speed), sensors.speed_resolution, noise=sensors.speed_noise
+            follower_speed, sensors.speed_resolution, noise=sensors.speed_noise
         ),
     }
     if use_t:
