@@ -18,7 +18,7 @@ Python:
   ``sg_full`` (backlash with the smooth hard stop, the temperature x load
   efficiency table, the thermal mass with a heat path to ambient, viscous
   losses, the load's Coulomb friction), one Python step per sample, written
-  from docs/physics.md and the decisions of issue 12 as a user would write
+  from docs/physics.md and its documented choices, as a user would write
   it: contact sub-steps with the contact by backward Euler (a bracketed
   Newton iteration), the mesh loss by the corrected rule of physics.md 4.6
   (D1: T_F = T_F0 + tau_mesh(T_F), on the sign branch), the load's Coulomb

@@ -108,7 +108,7 @@ static inline void sg_constant_viscous(gs_simple_gear_params *g, gs_rig_params *
     g->viscous_coefficients[1] = GS_R(0.004);
 }
 
-/* The terms of physics.md 11 beyond the seed blocks, each on
+/* The rig terms of physics.md 11 (Stribeck, compliance, ripple), each on
  * sg_constant (or sg_backlash_smooth) so that its cost is the difference. */
 static inline void sg_stribeck(gs_simple_gear_params *g, gs_rig_params *r)
 {

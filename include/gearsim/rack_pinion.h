@@ -4,7 +4,7 @@
  * Kinematics v_R = s_R*r_P*omega_P (docs/physics.md section 6); tau_P and F_R
  * are what the outside applies to the block. Three meshing-loss models with
  * the rack power threshold, pinion and rack viscous losses, thermal mass, and
- * backlash along the rack (an extension beyond the seed, physics.md 10).
+ * backlash along the rack (physics.md 10).
  */
 #ifndef GEARSIM_RACK_PINION_H
 #define GEARSIM_RACK_PINION_H

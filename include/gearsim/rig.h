@@ -25,7 +25,7 @@
  * smoothed law and the Coulomb friction is tanh-smoothed on
  * load_coulomb_speed_threshold.
  *
- * Three rig terms go beyond the seed blocks (physics.md 11), each off by
+ * Three rig terms model what real rigs add (physics.md 11), each off by
  * default: a Stribeck hump on the driven side's friction (it then holds at
  * rest up to the breakaway level), a compliant base shaft (spring and damper
  * from the drive to the base gear, which turns with base_inertia; speed-driven

@@ -204,7 +204,7 @@ static void test_reset_reproduces(void **state)
 #endif
 
 /* The hashed byte sequence: for each sample, the raw bytes of these 15
- * outputs in this order (the member order of gs_rig_output before issue 14,
+ * outputs in this order (the member order of gs_rig_output when the hashes were recorded,
  * which gearsim/fields.h keeps), i.e. FNV-1a 64 over the output array as the
  * golden values were recorded. Listed by name so that the hash stays the same
  * whatever the struct's layout. */

@@ -1,5 +1,5 @@
 /*
- * test_layout.c - the rig's data layout (issue 14, rig.h, gearsim/fields.h):
+ * test_layout.c - the rig's data layout (rig.h, gearsim/fields.h):
  *  - a snapshot is a copy of the state struct alone: restore it and the rig
  *    repeats its outputs bit for bit;
  *  - one constants block shared by two states gives the outputs of two rigs
@@ -175,7 +175,7 @@ static void test_shared_consts(void **state)
     }
 }
 
-/* (c) The published state size; the goal of issue 14 is <= 128 B in float. */
+/* (c) The published state size; the target is <= 128 B in float. */
 static void test_state_size(void **state)
 {
 #ifdef GS_SINGLE_PRECISION

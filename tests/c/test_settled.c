@@ -1,10 +1,10 @@
 /*
  * test_settled.c - settled operating points of both rigs (a combination
- * matrix) and stick-slip of the rig-level Coulomb friction (issue 12).
+ * matrix) and stick-slip of the rig-level Coulomb friction.
  *
  * Every expected value is derived in this file, by hand, from docs/physics.md
  * (sections 0-6, 8, 11, and the 4.6 correction) and the design decisions D1/D2
- * of issue 12; nothing is taken from the library's output.
+ * documented there; nothing is taken from the library's output.
  *
  * Both blocks share one rigid law. With the signed ratio rho = omega_B/omega_F
  * (Simple Gear: rho = s*g, eq. 1.1; Rack & Pinion: rho = s_R/r_P, eq. 6.1),

@@ -108,7 +108,7 @@ def test_every_parameter_with_c_default_and_unit(model_descriptions, reference, 
     assert by_name["dt"].unit == "s" and by_name["dt"].variability == "fixed"
     assert by_name["efficiency_const"].variability == "tunable"
     assert by_name["temperature_vector[1]"].unit == "K"
-    # the rig terms beyond the seed blocks: driven-side units follow the rig
+    # the rig terms of physics.md 11: driven-side units follow the rig
     assert by_name["load_breakaway_friction"].unit == ("N.m" if rig == "gear" else "N")
     assert by_name["load_stribeck_speed"].unit == ("rad/s" if rig == "gear" else "m/s")
     assert by_name["compliance_stiffness"].unit == "N.m/rad"
@@ -282,7 +282,7 @@ def _scenarios():
                 "inputs.ambient_temperature": np.full_like(t, 300.0),
             },
         ),
-        # the rig terms beyond the seed blocks (physics.md 11): a compliant
+        # the rig terms (physics.md 11): a compliant
         # base shaft with Stribeck friction and both ripple families
         "gear_speed_compliant_stribeck_ripple": dict(
             rig="gear",
@@ -332,7 +332,7 @@ def _scenarios():
                 "inputs.load": np.full_like(t, 2.0),
             },
         ),
-        # issue 22: a compliant mesh (no base inertia) with the driven
+        # a compliant mesh (no base inertia) with the driven
         # friction creeping behind it, and the step-mean speed of a rigid rack
         "gear_speed_mesh_spring_creep": dict(
             rig="gear",
@@ -464,7 +464,7 @@ BAD_VALUES = [
         "load_breakaway_friction",
     ),
     ("rack", {"load_breakaway_friction": 1.0, "load_stribeck_speed": 0.0}, "load_stribeck_speed"),
-    # base_inertia 0 with a compliance puts the spring at the mesh (issue 22);
+    # base_inertia 0 with a compliance puts the spring at the mesh;
     # a negative one is still refused
     ("gear", {"compliance_stiffness": 100.0, "base_inertia": -1e-3}, "base_inertia"),
     (

@@ -1,5 +1,5 @@
-"""The rig terms beyond the seed blocks, seen from Python (docs/physics.md 11,
-"Effects beyond the seed blocks"): Stribeck friction, the compliant base shaft
+"""The rig terms, seen from Python (docs/physics.md 11,
+"Effects of real rigs"): Stribeck friction, the compliant base shaft
 and the base-side torque ripple.
 
 These tests prove that each key reaches the C rig with its unit converted:

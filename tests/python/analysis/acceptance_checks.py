@@ -1,5 +1,5 @@
 """The acceptance checks shared by test_acceptance.py (the contract's effects)
-and test_acceptance_rig_effects.py (the effects beyond the seed blocks), on
+and test_acceptance_rig_effects.py (the rig effects of physics.md 11), on
 records of the independent generator (tests/python/analysis/independent)."""
 
 from __future__ import annotations

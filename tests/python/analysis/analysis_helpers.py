@@ -18,8 +18,8 @@ EMPS = os.path.normpath(os.path.join(REPO, "..", "shared", "data", "emps", "DATA
 
 #: The effect names of the measurement format (docs/measurement-format.md
 #: section 3), written out here as the tests' own copy of the contract: the
-#: seed blocks' effects, then those beyond them (issue 17). RESERVED_EFFECTS
-#: lists names the contract reserves for a later issue (none today).
+#: blocks' own effects, then the rig effects (physics.md 11). RESERVED_EFFECTS
+#: lists names the contract reserves for later (none today).
 CONTRACT_EFFECTS = (
     "meshing_efficiency",
     "load_dependent_efficiency",

@@ -199,7 +199,7 @@ def test_rack_coulomb_reaches_the_floor_with_the_structure_for_reversals() -> No
     ids=["backlash-first", "viscous-first"],
 )
 def test_backlash_next_to_viscous_friction_in_either_order(order: tuple[str, str]) -> None:
-    """Issue 15's failure: after viscous friction, the backlash gap came out
+    """A failure seen before: after viscous friction, the backlash gap came out
     40 % short. Either order must reach the floor and both truths."""
     effects = ("backlash", "viscous_friction")
     record = generate("simple_gear", effects)

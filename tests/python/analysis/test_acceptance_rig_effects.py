@@ -1,7 +1,7 @@
-"""Acceptance of the effects beyond the seed blocks (sensor_delay,
+"""Acceptance of the rig effects of physics.md 11 (sensor_delay,
 stribeck_friction, compliance, torque_ripple) on data gearsim did not make:
 records of the independent generator (tests/python/analysis/independent),
-whose truths are in its BEYOND_SEED_TRUTHS.
+whose truths are in its RIG_EFFECT_TRUTHS.
 
 For each effect on both rigs: the model lacks it, the diagnosis ranks it
 first, fitting it brings the validation error to within 1.5x the record's
@@ -34,7 +34,7 @@ import math
 import numpy as np
 import pytest
 from acceptance_checks import FLOOR_FACTOR, noise_floor, ranked_first_and_fitted_to_the_floor
-from independent import BEYOND_SEED_TRUTHS, RIGS, gearsim_model, generate, mechanism
+from independent import RIG_EFFECT_TRUTHS, RIGS, gearsim_model, generate, mechanism
 
 from gearsim.analysis import fit
 from gearsim.analysis import modelkit as mk
@@ -48,7 +48,7 @@ RECORDS = {
     "compliance": (("compliance",), {"profile": "steps"}),
     "torque_ripple": (("torque_ripple",), {}),
 }
-CASES = [(block, effect) for block in RIGS for effect in BEYOND_SEED_TRUTHS[block]]
+CASES = [(block, effect) for block in RIGS for effect in RIG_EFFECT_TRUTHS[block]]
 
 
 # A rigid rig against a compliant mesh under Coulomb friction on the rack
@@ -113,7 +113,7 @@ def check_delay(block: str, fitted, record) -> None:
     same motion and noise draws), within 0.2 ms (a fifth of a sample:
     linear interpolation between 1 ms samples against the truth's 0.25 ms
     grid, and torque noise)."""
-    truth = BEYOND_SEED_TRUTHS[block]["sensor_delay"]["torque_delay_s"]
+    truth = RIG_EFFECT_TRUTHS[block]["sensor_delay"]["torque_delay_s"]
     got = mk.torque_delay(fitted)
     assert truth - MODEL_LAG_S <= got <= truth, f"{got * 1e3:.3f} ms"
     others = tuple(e for e in record.effects if e != "sensor_delay")
@@ -233,7 +233,7 @@ def test_two_rounds_find_both_hidden_effects(
         # the structure for reversals in the model the lag is the model's
         # own, and the delay and the creep trade off over a sample: 7.06 ms
         # on the rack; within one sample (1 ms) either side
-        delay = BEYOND_SEED_TRUTHS[block]["sensor_delay"]["torque_delay_s"]
+        delay = RIG_EFFECT_TRUTHS[block]["sensor_delay"]["torque_delay_s"]
         got = mk.torque_delay(fitted)
         if structure:
             assert abs(got - delay) <= 1e-3, got
@@ -262,5 +262,5 @@ def test_truths_are_what_the_docs_say() -> None:
     assert rack.shaft_natural_frequency_rad_s / (2 * np.pi) == pytest.approx(47.45, abs=0.01)
     # the series springs of check_parameters: 600 and 5000 -> 535.7 N*m/rad
     assert _series_stiffness(gear) == pytest.approx(3000.0 / 5.6, rel=1e-12)
-    delay = BEYOND_SEED_TRUTHS["simple_gear"]["sensor_delay"]["torque_delay_s"]
+    delay = RIG_EFFECT_TRUTHS["simple_gear"]["sensor_delay"]["torque_delay_s"]
     assert delay / 1e-3 == pytest.approx(6.4)

@@ -1,4 +1,4 @@
-"""Safety of ``gearsim compare|diagnose|fit|report`` (issue 13).
+"""Safety of ``gearsim compare|diagnose|fit|report``.
 
 Run in process through :func:`gearsim.cli.main` on copies of the bundled demo
 data (the first 2000 samples) under tmp_path, or as a subprocess where a real

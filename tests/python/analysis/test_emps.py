@@ -2,7 +2,7 @@
 repository; skipped when absent). Starting from mass + viscous friction,
 diagnose points at Coulomb friction, then at the offset, and the fitted mass,
 viscous and Coulomb coefficients land within 10 % of the published values.
-With the effects beyond the seed blocks registered (sensor delay, Stribeck
+With the rig effects registered (sensor delay, Stribeck
 friction, compliance, ripple), none is ranked above the published ones; the
 torque is then seen to lead the position by about half a sample (the drive
 applies each command over the next sample), which is judged like any effect.

@@ -1,4 +1,4 @@
-"""Which candidates diagnose fits (issue 15, cost): the best few by screening,
+"""Which candidates diagnose fits (for cost): the best few by screening,
 the cheap ones, and the costly ones only when screening predicts a gain; all
 of them once a fitted candidate with no signature of its own helped anyway.
 And the backlash multi-start probes hold the parameters without starts."""

@@ -1,4 +1,4 @@
-"""The signatures of the effects beyond the seed blocks (issue 17), each on a
+"""The signatures of the rig effects (physics.md 11), each on a
 hand-made residual whose answer is known in closed form, the model file's
 [analysis] table, and the delay applied to the simulated torque.
 

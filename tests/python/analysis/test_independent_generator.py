@@ -1,7 +1,7 @@
 """The independent generator (tests/python/analysis/independent) checked on
 its own physics: settled torques against hand-derived values, the encoder's
 quantum, the noise floor, the compliant mesh's natural frequency; and the
-effects beyond the seed blocks: a compliant shaft's ring, the breakaway load
+rig effects: a compliant shaft's ring, the breakaway load
 of a Stribeck friction, a torque ripple at constant speed, a delayed torque
 channel. The expected numbers are worked out in the comments from the rig's
 constants, not taken from the generator or from gearsim."""

@@ -1,4 +1,4 @@
-"""Measurement inputs as loggers write them (issue 13): compressed files,
+"""Measurement inputs as loggers write them: compressed files,
 binary or mis-encoded files, CSV dialects, units in the header, column
 mappings with any header text, time in ms/us, standard input, header-only.
 

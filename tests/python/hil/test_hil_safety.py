@@ -1,4 +1,4 @@
-"""Safety of `gearsim hil ...` (issue 13): outputs never replace inputs and are
+"""Safety of `gearsim hil ...`: outputs never replace inputs and are
 written atomically; no traceback; a closed pipe ends quietly; logs whose time
 jumps are refused instead of exhausting memory; compressed logs; a replay that
 drives nothing fails; messages escape user data.
@@ -318,7 +318,7 @@ def test_broken_pipe_through_head(work: dict[str, Path]) -> None:
 def test_logconvert_asc_mixing_relative_and_absolute_time_is_refused(
     work: dict[str, Path], capsys: pytest.CaptureFixture
 ) -> None:
-    """The reproduction of issue 13: a .blf whose first frames are relative and
+    """A reported failure, reproduced: a .blf whose first frames are relative and
     the rest absolute, converted by python-can's own can.logconvert; to-csv
     tried to allocate 1.31 TiB, replay 65 TiB."""
     d = work["dir"]

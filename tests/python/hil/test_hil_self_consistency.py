@@ -341,7 +341,7 @@ def test_wall_clock_log_is_converted_with_a_warning(
 def test_compare_with_default_options_reproduces_the_rig(
     tmp_path: Path, capsys: pytest.CaptureFixture, offsets: tuple[int, ...]
 ) -> None:
-    """Issue 16's loop: hil run --log -> to-csv -> compare, default options,
+    """The recording loop: hil run --log -> to-csv -> compare, default options,
     wherever in the feedback interval the commands arrived."""
     pytest.importorskip("gearsim.analysis")
     log = tmp_path / "bench.blf"

@@ -3,16 +3,16 @@ physics of docs/physics.md: a compliant mesh (a dead zone in a spring when
 there is backlash), a drive that follows a commanded speed through its own
 speed loop, its own RK4 integrator at a quarter of the sample period, and
 real sensors (encoder speeds from whole position counts, torque noise and
-offset, load noise). Beyond the seed blocks it knows a delayed torque channel,
+offset, load noise). Beyond the blocks' losses it knows a delayed torque channel,
 a Stribeck hump on the driven side, a compliant shaft between the motor and
 the base gear, and a torque ripple of the base gear's angle
-(BEYOND_SEED_TRUTHS). It never calls gearsim's C core or its Rig, so tests
+(RIG_EFFECT_TRUTHS). It never calls gearsim's C core or its Rig, so tests
 that fit gearsim to these records stop fitting data made by the model itself.
 See docs/testing-python.md.
 """
 
 from .generator import (
-    BEYOND_SEED_TRUTHS,
+    RIG_EFFECT_TRUTHS,
     DT,
     PEAKS,
     RIGS,
@@ -25,7 +25,7 @@ from .generator import (
 from .plant import Losses, Mechanism, TrueRun, simulate_true
 
 __all__ = [
-    "BEYOND_SEED_TRUTHS",
+    "RIG_EFFECT_TRUTHS",
     "DT",
     "PEAKS",
     "RIGS",

@@ -103,11 +103,11 @@ STIFF_MESH_N_M = 2e6
 #: drive that holds the speed; this motor does, to 97 % (gear) and 94 %
 #: (rack).
 RIPPLE_MOTOR_KG_M2 = 0.2
-#: the effects real rigs show beyond the seed blocks (physics.md 11, "Effects
-#: beyond the seed blocks"), kept apart from TRUTHS so that the acceptance of
+#: the effects real rigs show on top of the blocks' losses (physics.md 11, "Effects
+#: of real rigs"), kept apart from TRUTHS so that the acceptance of
 #: the contract's first effects iterates over those alone. Each value sets
 #: fields of Losses, of Mechanism or of the Sensors, whichever has the name.
-BEYOND_SEED_TRUTHS = {
+RIG_EFFECT_TRUTHS = {
     "simple_gear": {
         # the torque logged by another device than the speeds, 6.4 ms late
         # (the issue's rig: 6 ms; a fraction of a sample on purpose)
@@ -182,7 +182,7 @@ def _truth_values(block: str, effects: tuple[str, ...]) -> tuple[dict, dict, dic
     for effect in effects:
         truth = TRUTHS[block].get(effect)
         if truth is None:
-            truth = BEYOND_SEED_TRUTHS[block][effect]
+            truth = RIG_EFFECT_TRUTHS[block][effect]
         for name, value in truth.items():
             if name in _LOSS_FIELDS:
                 losses[name] = value
