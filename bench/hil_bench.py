@@ -401,7 +401,9 @@ def main() -> int:
                 ]
                 if args.fifo:
                     fifo = (runner, params, rate, args.seconds, spin, args.fifo, pin)
-                    label = f"C runner, SCHED_FIFO {args.fifo}" + (", mlockall" if pin is not None else "")
+                    label = f"C runner, SCHED_FIFO {args.fifo}" + (
+                        ", mlockall" if pin is not None else ""
+                    )
                     runs.append((label, c_loop, fifo))
                 if not args.no_python:
                     runs.append(

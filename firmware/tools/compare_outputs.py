@@ -10,6 +10,7 @@ differ in structure or when any value differs by more than --max-ulp ULP.
 
 usage: compare_outputs.py HOST.txt TARGET.txt [--max-ulp N]
 """
+
 import argparse
 import struct
 import sys
@@ -81,13 +82,18 @@ def main():
     same = sum(s["same"] for s in stats.values())
     for name in order:
         s = stats[name]
-        note = "bit-identical" if s["same"] == s["values"] else (
-            f"max {s['ulp']} ULP ({s['where']}), max relative {s['rel']:.3g}")
+        note = (
+            "bit-identical"
+            if s["same"] == s["values"]
+            else (f"max {s['ulp']} ULP ({s['where']}), max relative {s['rel']:.3g}")
+        )
         print(f"  {name:24s} {s['same']:6d}/{s['values']:<6d} values identical  {note}")
         if s["ulp"] > args.max_ulp:
             bad += 1
-    print(f"compared {total} values in {len(order)} scenarios: {same} bit-identical, "
-          f"{total - same} different (allowed: up to {args.max_ulp} ULP)")
+    print(
+        f"compared {total} values in {len(order)} scenarios: {same} bit-identical, "
+        f"{total - same} different (allowed: up to {args.max_ulp} ULP)"
+    )
     return 1 if bad else 0
 
 
