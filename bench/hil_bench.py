@@ -297,8 +297,8 @@ def fmt(x: Any, digits: int = 1) -> str:
 
 def table(results: dict[str, Any]) -> str:
     rows = [
-        "| load | loop | rate | lateness p50 / p99 / p99.9 / max (us) | period error p99 / max (us) "
-        "| overruns | CPU share |",
+        "| load | loop | rate | lateness p50 / p99 / p99.9 / max (us) "
+        "| period error p99 / max (us) | overruns | CPU share |",
         "|---|---|---|---|---|---|---|",
     ]
     for r in results["loops"]:

@@ -94,7 +94,8 @@ def public_api(headers, single):
             names = re.findall(r"[A-Za-z_]\w*", head)
             if not names:
                 raise SystemExit(
-                    f"check_exports: cannot parse the GS_API declaration in {header}: {decl.strip()}"
+                    "check_exports: cannot parse the GS_API declaration in "
+                    f"{header}: {decl.strip()}"
                 )
             name = renames.get(names[-1], names[-1])
             declared[name] = header.name
@@ -146,7 +147,8 @@ def main():
         print(f"check_exports: ignored (linker/instrumentation): {' '.join(sorted(ignored))}")
     for name in extra:
         print(
-            f"check_exports: EXTRA   {name}: exported, but no GS_API declaration in the public headers"
+            f"check_exports: EXTRA   {name}: exported, "
+            "but no GS_API declaration in the public headers"
         )
     for name in missing:
         print(
@@ -156,7 +158,8 @@ def main():
         print(f"check_exports: FAIL: {len(extra)} extra, {len(missing)} missing")
         return 1
     print(
-        f"check_exports: ok: the {len(symbols)} exports are exactly the public API: {' '.join(sorted(symbols))}"
+        f"check_exports: ok: the {len(symbols)} exports are exactly the public API: "
+        + " ".join(sorted(symbols))
     )
     return 0
 

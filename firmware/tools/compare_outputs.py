@@ -44,7 +44,7 @@ def main():
         print(f"FAIL: {len(host)} lines on the host, {len(target)} on the target")
         return 1
     scenario, stats, order, bad = None, {}, [], 0
-    for hl, tl in zip(host, target):
+    for hl, tl in zip(host, target, strict=True):  # equal line counts: checked above
         hf, tf = hl.split(), tl.split()
         if hf and hf[0] == "scenario":
             scenario = hf[1]
@@ -61,7 +61,7 @@ def main():
             bad += 1
             continue
         st = stats[scenario]
-        for i, (a, b) in enumerate(zip(hf[1:], tf[1:])):
+        for i, (a, b) in enumerate(zip(hf[1:], tf[1:], strict=True)):  # lengths checked above
             width = 4 * len(a)
             st["values"] += 1
             v = as_float(int(a, 16), width)

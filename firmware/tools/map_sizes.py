@@ -5,7 +5,8 @@ and constants -> flash; .data -> flash + RAM; .bss -> RAM), and separately
 those from the C library (memcpy/memset) and the rest (startup, probe).
 
 usage: map_sizes.py PROG.map [PROG.map ...]  -> one line per map:
-  name gearsim_text gearsim_rodata gearsim_data gearsim_bss libc_text other_text other_data other_bss
+  name gearsim_text gearsim_rodata gearsim_data gearsim_bss libc_text
+  other_text other_data other_bss
 """
 
 import os
@@ -66,7 +67,10 @@ def sizes(path):
 def main():
     for path in sys.argv[1:]:
         s = sizes(path)
-        g = lambda o, k: s.get((o, k), 0)
+
+        def g(owner: str, section_kind: str, s: dict = s) -> int:  # this map's sizes, bound
+            return s.get((owner, section_kind), 0)
+
         name = os.path.basename(path).rsplit(".", 1)[0]
         print(
             name,

@@ -135,7 +135,7 @@ def _check_window(kind: str, ref: dict, got: dict, dbc: RigDbc) -> None:
             assert value(dbc, g[0], "status.flag.fault_active") == 1.0
             continue
         if kind == "corrupt":
-            flipped = sum(bin(a ^ b).count("1") for a, b in zip(g[0].data, r[0].data))
+            flipped = sum(bin(a ^ b).count("1") for a, b in zip(g[0].data, r[0].data, strict=False))
             assert flipped == 2, t
             continue
         x, want = value(dbc, g[0], "out.base_speed"), value(dbc, r[0], "out.base_speed")
@@ -214,7 +214,8 @@ def test_c_runner_applies_the_faults_as_the_python_bridge(tmp_path: Path) -> Non
     scenario = write_scenario(
         tmp_path / "s.toml",
         'at = 0.05\nfault = "noise"\nsignal = "FollowerSpeed"\nvalue = 0.3\nduration = 0.2',
-        'at = 0.1\nfault = "stuck"\nsignal = "BaseSpeed"\nvalue = 0\nwhen = "BaseSpeed > 10.25"\nduration = 0.05',
+        'at = 0.1\nfault = "stuck"\nsignal = "BaseSpeed"\nvalue = 0\n'
+        'when = "BaseSpeed > 10.25"\nduration = 0.05',
         'at = 0.2\nfault = "duplicate"\nframe = "GearFbThermal"\nuntil = 0.4',
         "at = 0.3\nload = 0.2\nover = 0.1",
         'at = 0.35\nparam = "load_coulomb_friction"\nvalue = 0.05',
@@ -254,7 +255,8 @@ def test_c_runner_applies_the_faults_as_the_python_bridge(tmp_path: Path) -> Non
 
 
 STUCK_SENSOR = (
-    'at = 0.2\nexpect = "DriveMode"\nequals = "speed"\nuntil = 0.3\nname = "drives before the fault"',
+    'at = 0.2\nexpect = "DriveMode"\nequals = "speed"\nuntil = 0.3\n'
+    'name = "drives before the fault"',
     'at = 0.3\nfault = "stuck"\nsignal = "BaseSpeed"\nvalue = 0.0',
     'at = 0.3\nexpect = "DriveMode"\nequals = "disabled"\nwithin = 0.1\n'
     'name = "disables within 100 ms of a stuck speed sensor"',
@@ -575,7 +577,8 @@ def test_socketcand_client_disconnect_and_reconnect_lose_nothing(tmp_path: Path)
 
 BAD = [
     (
-        '[scenario]\nduration = 1\n[[step]]\nat = 0.1\nfault = "offset"\nsignal = "Nope"\nvalue = 1\n',
+        "[scenario]\nduration = 1\n[[step]]\n"
+        'at = 0.1\nfault = "offset"\nsignal = "Nope"\nvalue = 1\n',
         "s.toml:6: signal: 'Nope' is no feedback signal of gear_rig",
     ),
     (
@@ -587,7 +590,8 @@ BAD = [
         "s.toml:6: value: expected a number",
     ),
     (
-        '[scenario]\nduration = 1\n[[step]]\nat = 0.2\nparam = "load_coulomb_friction"\nvalue = -1\n',
+        "[scenario]\nduration = 1\n[[step]]\n"
+        'at = 0.2\nparam = "load_coulomb_friction"\nvalue = -1\n',
         "s.toml:6: value: load_coulomb_friction = -1 refused by the rig",
     ),
 ]
