@@ -99,10 +99,18 @@
     O(GS_TEMPERATURE_FROM_INPUT, "input", "the measured_temperature input overrides the thermal state")
 
 /* Every option list, for the run-time tables: S(name). */
-#define GS_OPTION_LISTS(S)                                                                                            \
-    S(OutputShaftRotates)                                                                                             \
-    S(FrictionModel) S(RackFrictionModel) S(LossSmoothing) S(HardStopModel) S(Parameterization) S(RackDirectionality) \
-        S(BaseDrive) S(TemperatureSource)
+/* clang-format off: clang-format 14 re-wraps this list on every pass (it never settles) */
+#define GS_OPTION_LISTS(S) \
+    S(OutputShaftRotates)  \
+    S(FrictionModel)       \
+    S(RackFrictionModel)   \
+    S(LossSmoothing)       \
+    S(HardStopModel)       \
+    S(Parameterization)    \
+    S(RackDirectionality)  \
+    S(BaseDrive)           \
+    S(TemperatureSource)
+/* clang-format on */
 
 /* ---- parameter lists */
 
