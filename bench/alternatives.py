@@ -316,6 +316,17 @@ def backlash_ode(
     }
 
 
+def _mesh_loss(t_f0: float, k_loss: float, th: float) -> float:
+    """The meshing loss of python_loop_full for a follower torque t_f0 before
+    the loss, loss factor k_loss = 1/eta - 1 and sliding direction th (+-1)."""
+    if t_f0 == 0.0:
+        return 0.0
+    denominator = 1.0 - (k_loss * th if t_f0 > 0.0 else -k_loss * th)
+    if denominator > 0.0:
+        return t_f0 / denominator - t_f0
+    return k_loss * abs(t_f0) * th  # self-locking: no solution on the branch
+
+
 def python_loop_full(
     base_speed: Any,
     load: Any,
@@ -501,17 +512,8 @@ def python_loop_full(
             t_f0 = -sr_f * f_last
             eta = interp(loads, eta_of_load, abs(t_f_last) * inv_g)
             k_loss = 1.0 / eta - 1.0
-
-            def mesh_loss(th: float) -> float:
-                if t_f0 == 0.0:
-                    return 0.0
-                denominator = 1.0 - (k_loss * th if t_f0 > 0.0 else -k_loss * th)
-                if denominator > 0.0:
-                    return t_f0 / denominator - t_f0
-                return k_loss * abs(t_f0) * th  # self-locking: no solution on the branch
-
             at_rest = w_f == 0.0
-            tau_mesh = mesh_loss(1.0 if w_f > 0.0 else -1.0) if not at_rest else 0.0
+            tau_mesh = _mesh_loss(t_f0, k_loss, 1.0 if w_f > 0.0 else -1.0) if not at_rest else 0.0
             t_f_last = t_f0 + tau_mesh
             # the held base speed ramps linearly from the last sample to this one
             w_b_new = w_b_start + (w_in - w_b_start) * (k + 1) / n
@@ -529,7 +531,7 @@ def python_loop_full(
             # h*tau_C/J; from rest, the meshing loss the way it would move too
             hold_step = coulomb_step
             if at_rest and w_f_new != 0.0:
-                tau_mesh = mesh_loss(1.0 if w_f_new > 0.0 else -1.0)
+                tau_mesh = _mesh_loss(t_f0, k_loss, 1.0 if w_f_new > 0.0 else -1.0)
                 hold_step += h * abs(tau_mesh) / jh_f
             if w_f_new > hold_step:
                 w_f_new -= hold_step

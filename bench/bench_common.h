@@ -17,7 +17,7 @@
 #include "gearsim/gearsim.h"
 
 #define BENCH_PERIOD 4000 /* lcm of the input tones' periods at dt = 1 ms */
-#define BENCH_DT_S 1e-3
+#define BENCH_DT_S   1e-3
 
 typedef struct {
     const char *name;
@@ -194,8 +194,14 @@ static inline void rp_backlash_teeth(gs_rack_pinion_params *p, gs_rig_params *r)
     backlash_on(&p->backlash, GS_HARD_STOP_SMOOTH);
 }
 
-#define GEAR(name, desc) {#name, desc, GS_RIG_SIMPLE_GEAR, name, NULL}
-#define RACK(name, desc) {#name, desc, GS_RIG_RACK_PINION, NULL, name}
+#define GEAR(name, desc)                            \
+    {                                               \
+#name, desc, GS_RIG_SIMPLE_GEAR, name, NULL \
+    }
+#define RACK(name, desc)                            \
+    {                                               \
+#name, desc, GS_RIG_RACK_PINION, NULL, name \
+    }
 
 static const bench_config CONFIGS[] = {
     GEAR(sg_ideal, "Simple Gear, ideal (no losses)"),
@@ -220,7 +226,6 @@ static const bench_config CONFIGS[] = {
     RACK(rp_backlash_teeth, "Rack & Pinion, backlash (smooth) + constant efficiency, tooth parameters"),
 };
 #define N_CONFIGS (sizeof CONFIGS / sizeof CONFIGS[0])
-
 
 /* sin and cos of |x| <= 0.5 by their Taylor series (exact in double there). */
 static inline void bench_sincos(double x, double *s, double *c)
@@ -281,8 +286,8 @@ static inline void bench_make_inputs(gs_rig_input *in, double load_scale)
 /* Initialises the rig (its constants and state) and fills the input period
  * `in` for configuration c. Returns the init status; err receives the failing
  * parameter. */
-static inline gs_status bench_setup(const bench_config *c, gs_rig_consts *consts, gs_rig_state *state,
-                                    gs_rig_input *in, gs_error *err)
+static inline gs_status bench_setup(const bench_config *c, gs_rig_consts *consts, gs_rig_state *state, gs_rig_input *in,
+                                    gs_error *err)
 {
     gs_rig_params rp = gs_rig_params_default();
     rp.dt_s = (gs_real)BENCH_DT_S;

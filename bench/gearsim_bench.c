@@ -42,10 +42,10 @@
 #include "gearsim/gearsim.h"
 #include "bench_common.h"
 
-#define MAX_RUNS 101
-#define MAX_SELECTED 64
+#define MAX_RUNS       101
+#define MAX_SELECTED   64
 #define PERIOD_SAMPLES BENCH_PERIOD
-#define DT_S BENCH_DT_S
+#define DT_S           BENCH_DT_S
 
 /* The input period of each configuration (the rack's load depends on its
  * radius) and an output buffer for the batch mode. */
@@ -82,8 +82,7 @@ static int setup(const bench_config *c, bench_rig *rig)
     gs_error err;
     const gs_status s = bench_setup(c, &rig->consts, &rig->state, table_of(c), &err);
     if (s != GS_OK) {
-        fprintf(stderr, "gearsim_bench: %s: init failed: %s (%s)\n", c->name, gs_status_str(s),
-                err.parameter);
+        fprintf(stderr, "gearsim_bench: %s: init failed: %s (%s)\n", c->name, gs_status_str(s), err.parameter);
         return -1;
     }
     return 0;
@@ -165,8 +164,8 @@ typedef struct {
  * Wall-clock time is what a real-time loop sees; the thread's CPU time leaves
  * out most of the time the thread waited for a core while other processes
  * ran (not hypervisor steal time), so the two together show machine noise. */
-static void time_run(bench_rig *rig, const gs_rig_input *inputs, int batched, long steps,
-                     double *wall_ns, double *cpu_ns)
+static void time_run(bench_rig *rig, const gs_rig_input *inputs, int batched, long steps, double *wall_ns,
+                     double *cpu_ns)
 {
     gs_rig_reset(&rig->consts, &rig->state);
     const double c0 = clock_ns(CLOCK_THREAD_CPUTIME_ID);
@@ -242,11 +241,10 @@ static int dump_mode(const char *name, long steps, const char *path)
 
 static void usage(void)
 {
-    fprintf(stderr,
-            "usage: gearsim_bench [--runs N] [--steps N] [--config NAME]... [--json FILE]\n"
-            "       gearsim_bench --count NAME step|run STEPS\n"
-            "       gearsim_bench --dump NAME STEPS FILE\n"
-            "       gearsim_bench --list\n");
+    fprintf(stderr, "usage: gearsim_bench [--runs N] [--steps N] [--config NAME]... [--json FILE]\n"
+                    "       gearsim_bench --count NAME step|run STEPS\n"
+                    "       gearsim_bench --dump NAME STEPS FILE\n"
+                    "       gearsim_bench --list\n");
 }
 
 int main(int argc, char **argv)
@@ -299,15 +297,16 @@ int main(int argc, char **argv)
             perror(json_path);
             return 1;
         }
-        fprintf(json, "{\n  \"precision\": \"%s\",\n  \"runs\": %d,\n  \"steps_per_run\": %ld,\n"
-                      "  \"dt_s\": %g,\n  \"results\": [\n",
+        fprintf(json,
+                "{\n  \"precision\": \"%s\",\n  \"runs\": %d,\n  \"steps_per_run\": %ld,\n"
+                "  \"dt_s\": %g,\n  \"results\": [\n",
                 sizeof(gs_real) == sizeof(double) ? "double" : "float", runs, steps, DT_S);
     }
     printf("gearsim %s, gs_real = %s; %d runs x %ld steps per configuration and mode "
            "(median [min..max], IQR; ns per step)\n",
            GS_VERSION_STRING, sizeof(gs_real) == sizeof(double) ? "double" : "float", runs, steps);
-    printf("%-26s %-5s %9s %21s %17s %12s %9s\n", "configuration", "mode", "median", "[min..max]",
-           "IQR", "steps/s", "cpu med");
+    printf("%-26s %-5s %9s %21s %17s %12s %9s\n", "configuration", "mode", "median", "[min..max]", "IQR", "steps/s",
+           "cpu med");
     /* Round robin: run r of every configuration and mode comes before run r+1 of
      * any, so a burst of load on the machine spreads over all of them instead
      * of spoiling one configuration's runs. */
@@ -339,15 +338,15 @@ int main(int argc, char **argv)
         for (int batched = 0; batched < 2; ++batched) {
             const stats s = summarise(wall[k][batched], cpu[k][batched], runs);
             const char *mode = batched ? "run" : "step";
-            printf("%-26s %-5s %9.1f   [%7.1f..%7.1f]   %6.1f..%6.1f %12.3e %9.1f\n", c->name, mode,
-                   s.median, s.min, s.max, s.q1, s.q3, 1e9 / s.median, s.cpu_median);
+            printf("%-26s %-5s %9.1f   [%7.1f..%7.1f]   %6.1f..%6.1f %12.3e %9.1f\n", c->name, mode, s.median, s.min,
+                   s.max, s.q1, s.q3, 1e9 / s.median, s.cpu_median);
             if (json != NULL) {
                 fprintf(json,
                         "%s    {\"config\": \"%s\", \"description\": \"%s\", \"mode\": \"%s\", "
                         "\"substeps\": %d, \"median_ns\": %.3f, \"min_ns\": %.3f, \"max_ns\": %.3f, "
                         "\"q1_ns\": %.3f, \"q3_ns\": %.3f, \"steps_per_s\": %.1f, \"cpu_median_ns\": %.3f}",
-                        first ? "" : ",\n", c->name, c->description, mode, info.contact_substeps, s.median,
-                        s.min, s.max, s.q1, s.q3, 1e9 / s.median, s.cpu_median);
+                        first ? "" : ",\n", c->name, c->description, mode, info.contact_substeps, s.median, s.min,
+                        s.max, s.q1, s.q3, 1e9 / s.median, s.cpu_median);
                 first = 0;
             }
         }

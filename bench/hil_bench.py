@@ -297,8 +297,8 @@ def fmt(x: Any, digits: int = 1) -> str:
 
 def table(results: dict[str, Any]) -> str:
     rows = [
-        "| load | loop | rate | lateness p50 / p99 / p99.9 / max (us) | period error p99 / max (us) "
-        "| overruns | CPU share |",
+        "| load | loop | rate | lateness p50 / p99 / p99.9 / max (us) "
+        "| period error p99 / max (us) | overruns | CPU share |",
         "|---|---|---|---|---|---|---|",
     ]
     for r in results["loops"]:
@@ -401,7 +401,9 @@ def main() -> int:
                 ]
                 if args.fifo:
                     fifo = (runner, params, rate, args.seconds, spin, args.fifo, pin)
-                    label = f"C runner, SCHED_FIFO {args.fifo}" + (", mlockall" if pin is not None else "")
+                    label = f"C runner, SCHED_FIFO {args.fifo}" + (
+                        ", mlockall" if pin is not None else ""
+                    )
                     runs.append((label, c_loop, fifo))
                 if not args.no_python:
                     runs.append(

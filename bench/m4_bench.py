@@ -92,7 +92,8 @@ PROGRAMS = {
         gs_status s = gs_rig_init_gear(&ca, &sa, &p, &r, 0);
         if (s == GS_OK) s = gs_rig_init_rack(&cb, &sb, &q, &r, 0);
         if (s != GS_OK) return (int)gs_status_str(s)[0];
-        gs_rig_step(&ca, &sa, &in, &out); gs_rig_step(&cb, &sb, &in, &out); return (int)out.base_torque;""",
+        gs_rig_step(&ca, &sa, &in, &out); gs_rig_step(&cb, &sb, &in, &out);
+        return (int)out.base_torque;""",
 }
 
 MEM_FUNCS = """

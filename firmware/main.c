@@ -20,11 +20,11 @@
 
 #ifdef GS_SINGLE_PRECISION
 typedef uint32_t real_bits;
-#define BITS_FMT "%08" PRIx32
+#define BITS_FMT  "%08" PRIx32
 #define PRECISION "float"
 #else
 typedef uint64_t real_bits;
-#define BITS_FMT "%016" PRIx64
+#define BITS_FMT  "%016" PRIx64
 #define PRECISION "double"
 #endif
 
@@ -88,8 +88,8 @@ static void report_cost(const fw_scenario *s, const gs_rig_consts *consts, gs_ri
     }
     const uint64_t t2 = board_instructions();
     const uint64_t step_total = (t1 - t0) - (t2 - t1);
-    printf("# cost %s %" PRIu32 " instructions/step (QEMU -icount, %d steps, %d contact sub-steps)\n",
-           s->name, (uint32_t)(step_total / (uint64_t)s->steps), s->steps,
+    printf("# cost %s %" PRIu32 " instructions/step (QEMU -icount, %d steps, %d contact sub-steps)\n", s->name,
+           (uint32_t)(step_total / (uint64_t)s->steps), s->steps,
            info.contact_h_omega_n > GS_R(0.0) ? info.contact_substeps : 0); /* h*omega_n > 0: backlash */
     gs_rig_reset(consts, state);
 }
@@ -133,8 +133,7 @@ int main(void)
 #ifdef FW_TARGET
     board_counter_start();
     printf("# target Cortex-M4F (QEMU mps2-an386), precision " PRECISION "\n");
-    printf("# calibration %" PRIu32 " instructions counted for 200000 known\n",
-           (uint32_t)board_calibrate(100000U));
+    printf("# calibration %" PRIu32 " instructions counted for 200000 known\n", (uint32_t)board_calibrate(100000U));
 #endif
     /* Layout: informational only. RAM per rig instance is gs_rig_state; the
      * constants (gs_rig_consts) are read-only after init and may live in
@@ -144,9 +143,8 @@ int main(void)
     printf("# layout sizeof gs_rig_consts %u gs_rig_state %u gs_simple_gear_consts %u "
            "gs_rack_pinion_consts %u gs_block_state %u gs_rig_params %u gs_simple_gear_params %u "
            "gs_rack_pinion_params %u gs_rig_input %u gs_rig_output %u precision %s\n",
-           (unsigned)sizeof(gs_rig_consts), (unsigned)sizeof(gs_rig_state),
-           (unsigned)sizeof(gs_simple_gear_consts), (unsigned)sizeof(gs_rack_pinion_consts),
-           (unsigned)sizeof(gs_block_state), (unsigned)sizeof(gs_rig_params),
+           (unsigned)sizeof(gs_rig_consts), (unsigned)sizeof(gs_rig_state), (unsigned)sizeof(gs_simple_gear_consts),
+           (unsigned)sizeof(gs_rack_pinion_consts), (unsigned)sizeof(gs_block_state), (unsigned)sizeof(gs_rig_params),
            (unsigned)sizeof(gs_simple_gear_params), (unsigned)sizeof(gs_rack_pinion_params),
            (unsigned)sizeof(gs_rig_input), (unsigned)sizeof(gs_rig_output), PRECISION);
     print_columns();

@@ -8,9 +8,12 @@
 #include "scenarios.h"
 
 #define STEPS 1000
-#define DT GS_R(1e-3)
+#define DT    GS_R(1e-3)
 
-static gs_real time_of(int k) { return DT * (gs_real)(k + 1); }
+static gs_real time_of(int k)
+{
+    return DT * (gs_real)(k + 1);
+}
 
 /* Fractional part of t/period, in [0, 1). */
 static gs_real phase_of(gs_real t, gs_real period)
@@ -172,11 +175,10 @@ static void table2d(gs_simple_gear_params *g)
 {
     static const gs_real temps[4] = {GS_R(270.0), GS_R(290.0), GS_R(310.0), GS_R(330.0)};
     static const gs_real loads[5] = {GS_R(0.0), GS_R(5.0), GS_R(10.0), GS_R(20.0), GS_R(40.0)};
-    static const gs_real eta[4][5] = {
-        {GS_R(0.80), GS_R(0.88), GS_R(0.92), GS_R(0.94), GS_R(0.95)},
-        {GS_R(0.78), GS_R(0.86), GS_R(0.90), GS_R(0.93), GS_R(0.94)},
-        {GS_R(0.75), GS_R(0.84), GS_R(0.88), GS_R(0.91), GS_R(0.93)},
-        {GS_R(0.70), GS_R(0.80), GS_R(0.85), GS_R(0.89), GS_R(0.91)}};
+    static const gs_real eta[4][5] = {{GS_R(0.80), GS_R(0.88), GS_R(0.92), GS_R(0.94), GS_R(0.95)},
+                                      {GS_R(0.78), GS_R(0.86), GS_R(0.90), GS_R(0.93), GS_R(0.94)},
+                                      {GS_R(0.75), GS_R(0.84), GS_R(0.88), GS_R(0.91), GS_R(0.93)},
+                                      {GS_R(0.70), GS_R(0.80), GS_R(0.85), GS_R(0.89), GS_R(0.91)}};
     g->friction_model = GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY;
     g->temperature_count = 4;
     g->load_count = 5;

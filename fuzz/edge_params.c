@@ -25,7 +25,7 @@ typedef struct {
     void (*gear)(gs_simple_gear_params *p);
     void (*rack_p)(gs_rack_pinion_params *p);
     void (*rig)(gs_rig_params *p); /* the rig terms of physics.md 11, or NULL */
-    int speed_only;                 /* the compliant shaft needs a speed-driven base */
+    int speed_only;                /* the compliant shaft needs a speed-driven base */
 } edge_case;
 
 static void backlash(gs_backlash_params *b, gs_hard_stop_model law, double stiffness)
@@ -35,14 +35,46 @@ static void backlash(gs_backlash_params *b, gs_hard_stop_model law, double stiff
     b->stiffness_N_m = (gs_real)stiffness;
 }
 
-static void ratio_small(gs_simple_gear_params *p) { p->teeth_ratio = (gs_real)1e-3; p->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY; }
-static void ratio_large(gs_simple_gear_params *p) { p->teeth_ratio = (gs_real)1e3; p->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY; }
-static void ratio_small_backlash(gs_simple_gear_params *p) { ratio_small(p); backlash(&p->backlash, GS_HARD_STOP_SMOOTH, 1e6); }
-static void ratio_large_backlash(gs_simple_gear_params *p) { ratio_large(p); backlash(&p->backlash, GS_HARD_STOP_SMOOTH, 1e6); }
-static void ratio_small_load(gs_simple_gear_params *p) { p->teeth_ratio = (gs_real)1e-3; p->friction_model = GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY; p->idle_torque_Nm = (gs_real)1.0; }
-static void ratio_large_load(gs_simple_gear_params *p) { p->teeth_ratio = (gs_real)1e3; p->friction_model = GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY; p->idle_torque_Nm = (gs_real)1e-5; }
-static void stiff_smooth(gs_simple_gear_params *p) { backlash(&p->backlash, GS_HARD_STOP_SMOOTH, 1e9); }
-static void stiff_undamped(gs_simple_gear_params *p) { backlash(&p->backlash, GS_HARD_STOP_FULL_UNDAMPED, 1e9); }
+static void ratio_small(gs_simple_gear_params *p)
+{
+    p->teeth_ratio = (gs_real)1e-3;
+    p->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY;
+}
+static void ratio_large(gs_simple_gear_params *p)
+{
+    p->teeth_ratio = (gs_real)1e3;
+    p->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY;
+}
+static void ratio_small_backlash(gs_simple_gear_params *p)
+{
+    ratio_small(p);
+    backlash(&p->backlash, GS_HARD_STOP_SMOOTH, 1e6);
+}
+static void ratio_large_backlash(gs_simple_gear_params *p)
+{
+    ratio_large(p);
+    backlash(&p->backlash, GS_HARD_STOP_SMOOTH, 1e6);
+}
+static void ratio_small_load(gs_simple_gear_params *p)
+{
+    p->teeth_ratio = (gs_real)1e-3;
+    p->friction_model = GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY;
+    p->idle_torque_Nm = (gs_real)1.0;
+}
+static void ratio_large_load(gs_simple_gear_params *p)
+{
+    p->teeth_ratio = (gs_real)1e3;
+    p->friction_model = GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY;
+    p->idle_torque_Nm = (gs_real)1e-5;
+}
+static void stiff_smooth(gs_simple_gear_params *p)
+{
+    backlash(&p->backlash, GS_HARD_STOP_SMOOTH, 1e9);
+}
+static void stiff_undamped(gs_simple_gear_params *p)
+{
+    backlash(&p->backlash, GS_HARD_STOP_FULL_UNDAMPED, 1e9);
+}
 static void stiff_damped_lock(gs_simple_gear_params *p)
 {
     backlash(&p->backlash, GS_HARD_STOP_FULL_DAMPED, 1e9);
@@ -89,7 +121,10 @@ static void everything_large(gs_simple_gear_params *p)
     backlash(&p->backlash, GS_HARD_STOP_FULL_UNDAMPED, 1e9);
 }
 
-static void rack_stiff(gs_rack_pinion_params *p) { backlash(&p->backlash, GS_HARD_STOP_SMOOTH, 1e9); }
+static void rack_stiff(gs_rack_pinion_params *p)
+{
+    backlash(&p->backlash, GS_HARD_STOP_SMOOTH, 1e9);
+}
 static void rack_max_table_tiny_thermal(gs_rack_pinion_params *p)
 {
     p->friction_model = GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY;
@@ -107,12 +142,28 @@ static void rack_all(gs_rack_pinion_params *p)
     p->backlash.lock_enabled = 1;
 }
 
-static void gear_plain(gs_simple_gear_params *p) { p->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY; }
-static void rack_plain(gs_rack_pinion_params *p) { p->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY; }
+static void gear_plain(gs_simple_gear_params *p)
+{
+    p->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY;
+}
+static void rack_plain(gs_rack_pinion_params *p)
+{
+    p->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY;
+}
 /* far stiffer than 16 sub-steps resolve at 1 ms: h*omega_n about 5e3 */
-static void shaft_stiff(gs_rig_params *p) { p->compliance_stiffness_Nm_rad = (gs_real)1e9; }
-static void shaft_stiff_damped(gs_rig_params *p) { shaft_stiff(p); p->compliance_damping_Nm_s_rad = (gs_real)1e6; }
-static void shaft_soft(gs_rig_params *p) { p->compliance_stiffness_Nm_rad = (gs_real)1e-6; }
+static void shaft_stiff(gs_rig_params *p)
+{
+    p->compliance_stiffness_Nm_rad = (gs_real)1e9;
+}
+static void shaft_stiff_damped(gs_rig_params *p)
+{
+    shaft_stiff(p);
+    p->compliance_damping_Nm_s_rad = (gs_real)1e6;
+}
+static void shaft_soft(gs_rig_params *p)
+{
+    p->compliance_stiffness_Nm_rad = (gs_real)1e-6;
+}
 static void stribeck_sharp(gs_rig_params *p)
 {
     p->load_coulomb_friction = (gs_real)1.0;
@@ -221,8 +272,8 @@ static int run(const edge_case *c, gs_base_drive drive, int heat_path)
     }
     const char *drive_name = drive == GS_BASE_SPEED_DRIVEN ? "speed" : "torque";
     if (st != GS_OK) {
-        printf("FAIL %-38s %-6s heat %d: init rejected: %s: %s\n", c->name, drive_name, heat_path,
-               err.parameter, err.message);
+        printf("FAIL %-38s %-6s heat %d: init rejected: %s: %s\n", c->name, drive_name, heat_path, err.parameter,
+               err.message);
         return 1;
     }
     double peak_torque = 0.0, peak_speed = 0.0, peak_temp = 0.0, peak_force = 0.0;

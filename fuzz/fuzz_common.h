@@ -18,27 +18,27 @@
 #include "gearsim/gearsim.h"
 
 #ifdef GS_SINGLE_PRECISION
-#define FZ_EPS ((double)FLT_EPSILON)
-#define FZ_MAX FLT_MAX
-#define FZ_MIN FLT_MIN
+#define FZ_EPS    ((double)FLT_EPSILON)
+#define FZ_MAX    FLT_MAX
+#define FZ_MIN    FLT_MIN
 #define FZ_DENORM 1.40129846e-45f
 #else
-#define FZ_EPS DBL_EPSILON
-#define FZ_MAX DBL_MAX
-#define FZ_MIN DBL_MIN
+#define FZ_EPS    DBL_EPSILON
+#define FZ_MAX    DBL_MAX
+#define FZ_MIN    DBL_MIN
 #define FZ_DENORM 4.9406564584124654e-324
 #endif
 
 /* Violations of a property: print what and where, then abort so that
  * libFuzzer records the input as a crash. */
-#define FZ_CHECK(cond, ...)                                                      \
-    do {                                                                         \
-        if (!(cond)) {                                                           \
-            fprintf(stderr, "gearsim fuzz: property violated: %s\n  ", #cond);   \
-            fprintf(stderr, __VA_ARGS__);                                        \
-            fprintf(stderr, "\n");                                               \
-            abort();                                                             \
-        }                                                                        \
+#define FZ_CHECK(cond, ...)                                                    \
+    do {                                                                       \
+        if (!(cond)) {                                                         \
+            fprintf(stderr, "gearsim fuzz: property violated: %s\n  ", #cond); \
+            fprintf(stderr, __VA_ARGS__);                                      \
+            fprintf(stderr, "\n");                                             \
+            abort();                                                           \
+        }                                                                      \
     } while (0)
 
 typedef struct {
@@ -104,13 +104,40 @@ static inline int fz_finite(gs_real x)
 /* Values at the edges of the real type and of the parameters' validity. */
 static inline gs_real fz_interesting(unsigned i)
 {
-    static const gs_real table[] = {
-        (gs_real)0.0, (gs_real)-0.0, (gs_real)1.0, (gs_real)-1.0, (gs_real)0.5, (gs_real)2.0,
-        (gs_real)1e-3, (gs_real)1e3, (gs_real)1e-6, (gs_real)1e6, (gs_real)1e9, (gs_real)1e-9,
-        (gs_real)1e-30, (gs_real)1e30, FZ_MIN, FZ_MAX, -FZ_MAX, FZ_DENORM, (gs_real)INFINITY,
-        (gs_real)-INFINITY, (gs_real)NAN, (gs_real)(1.0 - FZ_EPS), (gs_real)(1.0 + FZ_EPS),
-        (gs_real)300.0, (gs_real)280.0, (gs_real)1e-4, (gs_real)0.98, (gs_real)0.05,
-        (gs_real)1e12, (gs_real)1e-12, (gs_real)1e-20, (gs_real)1e20, (gs_real)-1e-3, (gs_real)0.1};
+    static const gs_real table[] = {(gs_real)0.0,
+                                    (gs_real)-0.0,
+                                    (gs_real)1.0,
+                                    (gs_real)-1.0,
+                                    (gs_real)0.5,
+                                    (gs_real)2.0,
+                                    (gs_real)1e-3,
+                                    (gs_real)1e3,
+                                    (gs_real)1e-6,
+                                    (gs_real)1e6,
+                                    (gs_real)1e9,
+                                    (gs_real)1e-9,
+                                    (gs_real)1e-30,
+                                    (gs_real)1e30,
+                                    FZ_MIN,
+                                    FZ_MAX,
+                                    -FZ_MAX,
+                                    FZ_DENORM,
+                                    (gs_real)INFINITY,
+                                    (gs_real)-INFINITY,
+                                    (gs_real)NAN,
+                                    (gs_real)(1.0 - FZ_EPS),
+                                    (gs_real)(1.0 + FZ_EPS),
+                                    (gs_real)300.0,
+                                    (gs_real)280.0,
+                                    (gs_real)1e-4,
+                                    (gs_real)0.98,
+                                    (gs_real)0.05,
+                                    (gs_real)1e12,
+                                    (gs_real)1e-12,
+                                    (gs_real)1e-20,
+                                    (gs_real)1e20,
+                                    (gs_real)-1e-3,
+                                    (gs_real)0.1};
     return table[i % (sizeof table / sizeof table[0])];
 }
 
@@ -170,18 +197,22 @@ typedef struct {
     const char *name;
 } fz_field;
 
-#define FZ_F(type, member, kind) {offsetof(type, member), kind, 1, sizeof(((type *)0)->member), #member}
-#define FZ_A(type, member, n) {offsetof(type, member), FZ_REAL, n, sizeof(gs_real), #member}
+#define FZ_F(type, member, kind)                                              \
+    {                                                                         \
+        offsetof(type, member), kind, 1, sizeof(((type *)0)->member), #member \
+    }
+#define FZ_A(type, member, n)                                        \
+    {                                                                \
+        offsetof(type, member), FZ_REAL, n, sizeof(gs_real), #member \
+    }
 
-#define FZ_BACKLASH_FIELDS(type)                                                             \
-    FZ_F(type, backlash.enabled, FZ_INT), FZ_F(type, backlash.hard_stop_model, FZ_ENUM),     \
-        FZ_F(type, backlash.linear_backlash_m, FZ_REAL),                                     \
-        FZ_F(type, backlash.base_radius_m, FZ_REAL),                                         \
-        FZ_F(type, backlash.transition_region_m, FZ_REAL),                                   \
-        FZ_F(type, backlash.stiffness_N_m, FZ_REAL), FZ_F(type, backlash.damping_N_s_m, FZ_REAL), \
-        FZ_F(type, backlash.initial_position_m, FZ_REAL), FZ_F(type, backlash.no_pull, FZ_INT), \
-        FZ_F(type, backlash.lock_enabled, FZ_INT),                                           \
-        FZ_F(type, backlash.contact_speed_threshold_m_s, FZ_REAL),                           \
+#define FZ_BACKLASH_FIELDS(type)                                                                        \
+    FZ_F(type, backlash.enabled, FZ_INT), FZ_F(type, backlash.hard_stop_model, FZ_ENUM),                \
+        FZ_F(type, backlash.linear_backlash_m, FZ_REAL), FZ_F(type, backlash.base_radius_m, FZ_REAL),   \
+        FZ_F(type, backlash.transition_region_m, FZ_REAL), FZ_F(type, backlash.stiffness_N_m, FZ_REAL), \
+        FZ_F(type, backlash.damping_N_s_m, FZ_REAL), FZ_F(type, backlash.initial_position_m, FZ_REAL),  \
+        FZ_F(type, backlash.no_pull, FZ_INT), FZ_F(type, backlash.lock_enabled, FZ_INT),                \
+        FZ_F(type, backlash.contact_speed_threshold_m_s, FZ_REAL),                                      \
         FZ_F(type, backlash.contact_release_force_N, FZ_REAL)
 
 static const fz_field fz_gear_fields[] = {
@@ -200,7 +231,7 @@ static const fz_field fz_gear_fields[] = {
     FZ_A(gs_simple_gear_params, efficiency_vector, GS_TABLE_MAX),
     FZ_F(gs_simple_gear_params, load_count, FZ_INT),
     FZ_A(gs_simple_gear_params, load_vector_Nm, GS_TABLE_MAX),
-    FZ_A(gs_simple_gear_params, efficiency_matrix, GS_TABLE_MAX * GS_TABLE_MAX),
+    FZ_A(gs_simple_gear_params, efficiency_matrix, GS_TABLE_MAX *GS_TABLE_MAX),
     FZ_BACKLASH_FIELDS(gs_simple_gear_params),
     FZ_A(gs_simple_gear_params, viscous_coefficients, 2),
     FZ_F(gs_simple_gear_params, thermal_mass_J_K, FZ_REAL),

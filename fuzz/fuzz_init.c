@@ -42,8 +42,7 @@ static int backlash_in_envelope(const gs_backlash_params *b, int gear)
     return in_mag(b->linear_backlash_m, 1e-9, 1.0) && (!gear || in_mag(b->base_radius_m, 1e-4, 10.0)) &&
            in_mag(b->transition_region_m, 1e-12, 1.0) && in_mag(b->stiffness_N_m, 1.0, 1e10) &&
            in_mag(b->damping_N_s_m, 1e-6, 1e7) && in_mag(b->initial_position_m, 1e-12, 1.0) &&
-           in_mag(b->contact_speed_threshold_m_s, 1e-9, 1e3) &&
-           in_mag(b->contact_release_force_N, 1e-9, 1e6);
+           in_mag(b->contact_speed_threshold_m_s, 1e-9, 1e3) && in_mag(b->contact_release_force_N, 1e-9, 1e6);
 }
 
 /* The first n of x (n a fuzzed count: at most cap). */
@@ -77,8 +76,7 @@ static int gear_in_envelope(const gs_simple_gear_params *p)
            in_mag(p->efficiency_const, 1e-3, 1.0) && in_mag(p->efficiency_nominal, 1e-3, 1.0) &&
            in_mag(p->speed_threshold_rad_s, 1e-9, 1e6) &&
            table_in_envelope(p->efficiency_vector, p->temperature_count, GS_TABLE_MAX, 1e-3, 1.0) &&
-           table_in_envelope(p->load_vector_Nm, p->load_count, GS_TABLE_MAX, 1e-9, 1e6) &&
-           matrix_in_envelope(p) &&
+           table_in_envelope(p->load_vector_Nm, p->load_count, GS_TABLE_MAX, 1e-9, 1e6) && matrix_in_envelope(p) &&
            in_mag(p->viscous_coefficients[0], 1e-9, 1e3) && in_mag(p->viscous_coefficients[1], 1e-9, 1e3) &&
            in_mag(p->thermal_mass_J_K, 1e-6, 1e9) && in_mag(p->initial_temperature_K, 1e-3, 1e4) &&
            backlash_in_envelope(&p->backlash, 1);
@@ -99,7 +97,8 @@ static int rack_in_envelope(const gs_rack_pinion_params *p)
 static int ripple_in_envelope(const gs_rig_params *p)
 {
     for (int i = 0; i < GS_RIPPLE_HARMONICS; ++i) {
-        if (!in_mag(p->ripple_revolution_amplitude_Nm[i], 1e-9, 1e4) || !in_mag(p->ripple_mesh_amplitude_Nm[i], 1e-9, 1e4) ||
+        if (!in_mag(p->ripple_revolution_amplitude_Nm[i], 1e-9, 1e4) ||
+            !in_mag(p->ripple_mesh_amplitude_Nm[i], 1e-9, 1e4) ||
             !in_mag(p->ripple_revolution_phase_rad[i], 0.0, 1e6) || !in_mag(p->ripple_mesh_phase_rad[i], 0.0, 1e6)) {
             return 0;
         }
@@ -131,8 +130,7 @@ static void check_error(gs_status st, const gs_error *err, int pattern_ok)
     FZ_CHECK(pattern_ok, "failed init (status %d) modified the model", (int)st);
     if (err != NULL) {
         FZ_CHECK(err->status == st, "err->status %d != returned %d", (int)err->status, (int)st);
-        FZ_CHECK(err->parameter != NULL && err->parameter[0] != '\0', "no parameter name for status %d",
-                 (int)st);
+        FZ_CHECK(err->parameter != NULL && err->parameter[0] != '\0', "no parameter name for status %d", (int)st);
         FZ_CHECK(err->message == gs_status_str(st), "err->message is not gs_status_str(%d)", (int)st);
     }
 }

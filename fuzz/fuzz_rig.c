@@ -61,24 +61,24 @@ typedef struct {
     int passive;
     double r_base;
     double r_follow;
-    double dt;                     /* dt_s */
-    int substeps;                  /* gs_rig_info.contact_substeps (1 without backlash) */
-    int torque_driven;             /* base_drive == GS_BASE_TORQUE_DRIVEN */
+    double dt;         /* dt_s */
+    int substeps;      /* gs_rig_info.contact_substeps (1 without backlash) */
+    int torque_driven; /* base_drive == GS_BASE_TORQUE_DRIVEN */
     double load_offset;
     double load_coulomb;
-    double base_extra;             /* largest ripple torque on the base, N*m */
-    int compliant;                 /* compliant base shaft */
-    int ramp;                      /* base_speed_ramp: torques at the step's mean speed */
-    double stiffness;              /* backlash K, D, b/2, no-pull */
+    double base_extra; /* largest ripple torque on the base, N*m */
+    int compliant;     /* compliant base shaft */
+    int ramp;          /* base_speed_ramp: torques at the step's mean speed */
+    double stiffness;  /* backlash K, D, b/2, no-pull */
     double damping;
     double half_gap;
     int no_pull;
-    double inv_eff_mass_contact;   /* 1/m_eff at the pitch line for one sub-step (backlash) */
-    double base_inertia;           /* J_B, J_F: the kinetic energy of a torque-driven rig */
+    double inv_eff_mass_contact; /* 1/m_eff at the pitch line for one sub-step (backlash) */
+    double base_inertia;         /* J_B, J_F: the kinetic energy of a torque-driven rig */
     double driven_inertia;
     double ripple_cos[2], ripple_sin[2], mesh_cos[2], mesh_sin[2]; /* A*cos(phi), A*sin(phi) of eq. 11.5 */
-    double ripple_sum;             /* sum of the ripple amplitudes, N*m */
-    double ripple_stiffness;       /* K_r = sum i*A_i + j*Z*M_j, N*m/rad */
+    double ripple_sum;                                             /* sum of the ripple amplitudes, N*m */
+    double ripple_stiffness;                                       /* K_r = sum i*A_i + j*Z*M_j, N*m/rad */
     int teeth;
 } rig_info;
 
@@ -88,7 +88,8 @@ static double ripple_at(const rig_info *info, double theta)
     double t = 0.0;
     for (int i = 0; i < 2; ++i) {
         t += info->ripple_cos[i] * cos((i + 1) * theta) - info->ripple_sin[i] * sin((i + 1) * theta);
-        t += info->mesh_cos[i] * cos((i + 1) * info->teeth * theta) - info->mesh_sin[i] * sin((i + 1) * info->teeth * theta);
+        t += info->mesh_cos[i] * cos((i + 1) * info->teeth * theta) -
+             info->mesh_sin[i] * sin((i + 1) * info->teeth * theta);
     }
     return t;
 }
@@ -147,8 +148,8 @@ static gs_status build(fz_reader *r, gs_rig_consts *consts, gs_rig_state *state,
     gs_rig_params rp = gs_rig_params_default();
     rp.dt_s = (gs_real)fz_log_range(r, 1e-5, 1e-2);
     rp.base_drive = (c0 & 2U) ? GS_BASE_TORQUE_DRIVEN : GS_BASE_SPEED_DRIVEN;
-    rp.base_inertia_kg_m2 = (rp.base_drive == GS_BASE_TORQUE_DRIVEN || (c2 & 1U))
-                                ? (gs_real)fz_log_range(r, 1e-6, 1e1) : (gs_real)0.0;
+    rp.base_inertia_kg_m2 =
+        (rp.base_drive == GS_BASE_TORQUE_DRIVEN || (c2 & 1U)) ? (gs_real)fz_log_range(r, 1e-6, 1e1) : (gs_real)0.0;
     rp.initial_base_speed_rad_s = (gs_real)fz_range(r, -100.0, 100.0);
     rp.driven_inertia = (gs_real)fz_log_range(r, 1e-6, 1e2);
     rp.load_coulomb_friction = (c2 & 2U) ? (gs_real)fz_log_range(r, 1e-3, 1e2) : (gs_real)0.0;
@@ -169,9 +170,11 @@ static gs_status build(fz_reader *r, gs_rig_consts *consts, gs_rig_state *state,
         rp.load_stribeck_speed = (gs_real)fz_log_range(r, 1e-4, 10.0);
         const uint8_t harmonics = fz_u8(r);
         for (int i = 0; i < GS_RIPPLE_HARMONICS; ++i) {
-            rp.ripple_revolution_amplitude_Nm[i] = (harmonics >> i & 1U) ? (gs_real)fz_log_range(r, 1e-4, 1e2) : (gs_real)0.0;
+            rp.ripple_revolution_amplitude_Nm[i] =
+                (harmonics >> i & 1U) ? (gs_real)fz_log_range(r, 1e-4, 1e2) : (gs_real)0.0;
             rp.ripple_revolution_phase_rad[i] = (gs_real)fz_range(r, -10.0, 10.0);
-            rp.ripple_mesh_amplitude_Nm[i] = (harmonics >> (i + 2) & 1U) ? (gs_real)fz_log_range(r, 1e-4, 1e2) : (gs_real)0.0;
+            rp.ripple_mesh_amplitude_Nm[i] =
+                (harmonics >> (i + 2) & 1U) ? (gs_real)fz_log_range(r, 1e-4, 1e2) : (gs_real)0.0;
             rp.ripple_mesh_phase_rad[i] = (gs_real)fz_range(r, -10.0, 10.0);
             base_extra += (double)rp.ripple_revolution_amplitude_Nm[i] + (double)rp.ripple_mesh_amplitude_Nm[i];
         }
@@ -204,8 +207,8 @@ static gs_status build(fz_reader *r, gs_rig_consts *consts, gs_rig_state *state,
         g.nominal_output_torque_Nm = (gs_real)fz_log_range(r, 1e-2, 1e3);
         g.efficiency_nominal = (gs_real)fz_range(r, 0.3, 0.99);
         /* idle torque within the k >= 0 limit of eq. 2.5 */
-        const double k_max = (1.0 / (double)g.efficiency_nominal - 1.0) * (double)g.nominal_output_torque_Nm
-                             / (double)g.teeth_ratio;
+        const double k_max =
+            (1.0 / (double)g.efficiency_nominal - 1.0) * (double)g.nominal_output_torque_Nm / (double)g.teeth_ratio;
         g.idle_torque_Nm = (gs_real)(0.999 * k_max * fz_range(r, 0.0, 1.0));
         g.speed_threshold_rad_s = (gs_real)fz_log_range(r, 1e-4, 1.0);
         g.temperature_count = 2 + (int)((c1 >> 3) % (GS_TABLE_MAX - 1));
@@ -368,9 +371,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
      * limit L2 (docs/hardening.md). Without -DFZ_STRICT such rigs are still
      * stepped (no crash, no UB) but their outputs are not checked. */
     const double h_sub = dt / (double)info.substeps;
-    const double kappa = info.backlash ? h_sub * info.inv_eff_mass_contact
-                                             * (info.stiffness * h_sub + info.damping)
-                                       : 0.0;
+    const double kappa =
+        info.backlash ? h_sub * info.inv_eff_mass_contact * (info.stiffness * h_sub + info.damping) : 0.0;
     const int checked = FZ_STRICT_ENERGY || kappa * eps <= 1e-4;
     /* snapshots: copies of the state; the shadow steps with a copy of the
      * constants (plain data, no pointers) */
@@ -396,8 +398,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         const gs_real *v = fz_rig_output_values(o);
         if (fz_verbose()) {
             fprintf(stderr, "step %d in: w_B %.17g tau_m %.17g load %.17g T_amb %.17g T_meas %.17g\n  out:", k,
-                    (double)in->base_speed, (double)in->base_torque, (double)in->load,
-                    (double)in->ambient_temperature, (double)in->measured_temperature);
+                    (double)in->base_speed, (double)in->base_torque, (double)in->load, (double)in->ambient_temperature,
+                    (double)in->measured_temperature);
             for (int i = 0; i < GS_RIG_OUTPUT_FIELDS; ++i) {
                 fprintf(stderr, " %s %.9g", gs_rig_output_info[i].name, (double)v[i]);
             }
@@ -418,30 +420,28 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         const double loss = (double)o->loss_power;
         /* with the step-mean speed the torques are those of the mean of the
          * last and this speed: the larger of the two bounds it */
-        const double w_b = info.ramp ? fmax(fabs((double)o->base_speed), fabs(w_b_before))
-                                     : fabs((double)o->base_speed);
-        const double w_f = info.ramp ? fmax(fabs((double)o->follower_speed), fabs(w_f_before))
-                                     : fabs((double)o->follower_speed);
+        const double w_b =
+            info.ramp ? fmax(fabs((double)o->base_speed), fabs(w_b_before)) : fabs((double)o->base_speed);
+        const double w_f =
+            info.ramp ? fmax(fabs((double)o->follower_speed), fabs(w_f_before)) : fabs((double)o->follower_speed);
         /* magnitude of the terms whose rounding the balance carries */
-        const double scale = fabs((double)o->base_port_torque) * w_b
-                             + fabs((double)o->follower_port_torque) * w_f + fabs(loss) + fabs(port)
-                             + fabs((double)o->contact_force) * (info.r_base * w_b + info.r_follow * w_f);
+        const double scale = fabs((double)o->base_port_torque) * w_b + fabs((double)o->follower_port_torque) * w_f +
+                             fabs(loss) + fabs(port) +
+                             fabs((double)o->contact_force) * (info.r_base * w_b + info.r_follow * w_f);
         /* With backlash the relative tooth speed is the difference of the free
          * speeds that the contact and external impulses produce in a sub-step;
          * on a light side those are much larger than the step's speeds, and
          * their rounding multiplies the contact force. */
         const double f_abs = fabs((double)o->contact_force);
-        const double f_ext = (fabs((double)in->load) + fabs(info.load_offset) + info.load_coulomb)
-                                 / info.r_follow
-                             + (info.torque_driven ? (fabs((double)in->base_torque) + info.base_extra) / info.r_base
-                                                                        : 0.0);
+        const double f_ext =
+            (fabs((double)in->load) + fabs(info.load_offset) + info.load_coulomb) / info.r_follow +
+            (info.torque_driven ? (fabs((double)in->base_torque) + info.base_extra) / info.r_base : 0.0);
         /* (f_abs + f_ext)^2, not f_abs*(f_abs + f_ext): the step means can
          * cancel (a locked light rack alternating between sliding and stuck
          * sub-steps has a mean force of 1e-16 N against 4.5 N per sub-step),
          * while the external push alone still makes large sub-step speeds */
-        const double impulse_scale = info.backlash ? (f_abs + f_ext) * (f_abs + f_ext) * h_sub
-                                                         * info.inv_eff_mass_contact
-                                                   : 0.0;
+        const double impulse_scale =
+            info.backlash ? (f_abs + f_ext) * (f_abs + f_ext) * h_sub * info.inv_eff_mass_contact : 0.0;
         if (info.torque_driven) {
             /* The drive's work is exact: dKE + dE_contact <= W. */
             const double w_b1 = (double)o->base_speed, w_f1 = (double)o->follower_speed;
@@ -451,7 +451,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             const double motor = (double)in->base_torque;
             const double ripple = info.ripple_sum > 0.0 ? ripple_at(&info, theta_before) : 0.0;
             const double work = (motor - ripple) * d_theta + push * d_x;
-            const double ke0 = 0.5 * (info.base_inertia * w_b_before * w_b_before + info.driven_inertia * w_f_before * w_f_before);
+            const double ke0 =
+                0.5 * (info.base_inertia * w_b_before * w_b_before + info.driven_inertia * w_f_before * w_f_before);
             const double ke1 = 0.5 * (info.base_inertia * w_b1 * w_b1 + info.driven_inertia * w_f1 * w_f1);
             const double e0 = info.backlash ? energy_before : 0.0, e1 = (double)o->contact_energy;
             const double created = (ke1 - ke0) + (e1 - e0) - work;
@@ -460,14 +461,17 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
              * cos, and the tooth phase Z*theta carries eps*|theta|*Z); of the
              * contact's absolute position like the backlash check below */
             const double n_sub = (double)info.substeps;
-            const double quant = (n_sub + 1.0) * eps * (fabs(motor - ripple) * (fabs(theta_before) + fabs(theta1))
-                                                       + fabs(push) * (fabs(x_before) + fabs(x1)))
-                                 + 4.0 * info.ripple_stiffness * eps * (fabs(theta_before) + 1.0) * fabs(d_theta);
+            const double quant = (n_sub + 1.0) * eps *
+                                     (fabs(motor - ripple) * (fabs(theta_before) + fabs(theta1)) +
+                                      fabs(push) * (fabs(x_before) + fabs(x1))) +
+                                 4.0 * info.ripple_stiffness * eps * (fabs(theta_before) + 1.0) * fabs(d_theta);
             const double f_spring = info.backlash ? sqrt(2.0 * info.stiffness * fmax(e0, e1)) : 0.0;
-            const double position = info.backlash ? 4.0 * f_spring * eps * (fabs((double)o->backlash_position) + info.half_gap) * n_sub : 0.0;
-            const double mag = ke0 + ke1 + e0 + e1 + fabs(motor * d_theta) + fabs(ripple * d_theta) + fabs(push * d_x)
-                               + dt * (fabs(loss) + fabs(port) + fabs((double)o->base_port_torque) * fabs(w_b1)
-                                       + fabs((double)o->follower_port_torque) * fabs(w_f1));
+            const double position =
+                info.backlash ? 4.0 * f_spring * eps * (fabs((double)o->backlash_position) + info.half_gap) * n_sub
+                              : 0.0;
+            const double mag = ke0 + ke1 + e0 + e1 + fabs(motor * d_theta) + fabs(ripple * d_theta) + fabs(push * d_x) +
+                               dt * (fabs(loss) + fabs(port) + fabs((double)o->base_port_torque) * fabs(w_b1) +
+                                     fabs((double)o->follower_port_torque) * fabs(w_f1));
             /* and the sub-step impulses of the contact, whose free speeds
              * (a light side, a large motor torque on locked teeth) are far
              * larger than the step's: their rounding times the force */
@@ -492,11 +496,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             }
         } else if (!info.backlash) {
             FZ_CHECK(fabs(port - loss) <= 64.0 * eps * scale + 1e-300,
-                     "rigid mesh: port_power %.9g != loss_power %.9g (scale %.3g) at step %d", port, loss,
-                     scale, k);
+                     "rigid mesh: port_power %.9g != loss_power %.9g (scale %.3g) at step %d", port, loss, scale, k);
             if (info.passive) {
-                FZ_CHECK(loss >= -64.0 * eps * scale,
-                         "rigid mesh: loss_power %.9g < 0 (scale %.3g) at step %d", loss, scale, k);
+                FZ_CHECK(loss >= -64.0 * eps * scale, "rigid mesh: loss_power %.9g < 0 (scale %.3g) at step %d", loss,
+                         scale, k);
             }
         } else {
             /* With backlash the meshing loss acts only as a friction that never
@@ -509,13 +512,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
              * below ulp(x) is lost while the ports still see it (float: x ~ b/2
              * resolves a stiff contact's penetration to a few hundred ulp). */
             const double f_spring = sqrt(2.0 * info.stiffness * fmax(energy, energy_before));
-            const double quantum = 4.0 * (f_abs + f_spring) * eps * (fabs((double)o->backlash_position)
-                                                        + info.half_gap) * (double)info.substeps
+            const double quantum = 4.0 * (f_abs + f_spring) * eps *
+                                       (fabs((double)o->backlash_position) + info.half_gap) * (double)info.substeps
                                    /* and the position moves by the rounding of the relative speed
                                     * r_B*w_B - r_F*w_F (locked teeth), against the spring */
                                    + 4.0 * f_spring * eps * (info.r_base * w_b + info.r_follow * w_f) * dt;
-            const double tol = 1024.0 * eps * ((scale + impulse_scale) * dt + energy + energy_before) + quantum
-                               + 1e-300;
+            const double tol =
+                1024.0 * eps * ((scale + impulse_scale) * dt + energy + energy_before) + quantum + 1e-300;
             FZ_CHECK(created <= tol,
                      "backlash: energy created %.9g J > tol %.3g (port %.9g W, loss %.9g W, dt %g, E %.9g -> %.9g J)"
                      " at step %d",
@@ -529,12 +532,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                  * NEWTON_TOLERANCE of the pitch-line speed scale, which the
                  * impulse-balance force carries as (1 + kappa)/c times that,
                  * against the closing speed */
-                const double v_scale = info.r_base * w_b + info.r_follow * w_f
-                                       + h_sub * f_abs * info.inv_eff_mass_contact;
+                const double v_scale =
+                    info.r_base * w_b + info.r_follow * w_f + h_sub * f_abs * info.inv_eff_mass_contact;
                 const double c_sub = h_sub * info.inv_eff_mass_contact;
                 const double solver = FZ_NEWTON_TOLERANCE * (1.0 + kappa) / c_sub * v_scale * v_scale * dt;
-                FZ_CHECK(loss * dt >= -(tol + solver), "backlash: loss_power %.9g W < 0 (tol %.3g J + solver %.3g J) at step %d",
-                         loss, tol, solver, k);
+                FZ_CHECK(loss * dt >= -(tol + solver),
+                         "backlash: loss_power %.9g W < 0 (tol %.3g J + solver %.3g J) at step %d", loss, tol, solver,
+                         k);
             }
             energy_before = energy;
         }

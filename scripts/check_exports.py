@@ -20,9 +20,30 @@ import sys
 from pathlib import Path
 
 # Defined by the linker or by instrumentation, not by the library's code.
-LINKER_SYMBOLS = {"_init", "_fini", "_edata", "_end", "__bss_start", "__end__", "_etext", "__data_start"}
-INSTRUMENTATION_PREFIXES = ("__asan", "__odr_asan", "__ubsan", "__sancov", "__tsan", "__msan", "__lsan",
-                            "__gcov", "__llvm_", "__hwasan", "__start_", "__stop_")
+LINKER_SYMBOLS = {
+    "_init",
+    "_fini",
+    "_edata",
+    "_end",
+    "__bss_start",
+    "__end__",
+    "_etext",
+    "__data_start",
+}
+INSTRUMENTATION_PREFIXES = (
+    "__asan",
+    "__odr_asan",
+    "__ubsan",
+    "__sancov",
+    "__tsan",
+    "__msan",
+    "__lsan",
+    "__gcov",
+    "__llvm_",
+    "__hwasan",
+    "__start_",
+    "__stop_",
+)
 
 PRECISION_SUFFIX = "_f32"
 
@@ -48,14 +69,19 @@ def public_api(headers, single):
         for line in lines:
             stripped = line.strip()
             if stripped.startswith("#"):
-                m = re.match(r"#\s*define\s+(\w+)\s+GS_PRECISION_NAME\s*\(\s*(\w+)\s*\)\s*$", stripped)
+                m = re.match(
+                    r"#\s*define\s+(\w+)\s+GS_PRECISION_NAME\s*\(\s*(\w+)\s*\)\s*$", stripped
+                )
                 if m:
                     renames[m.group(1)] = m.group(2) + (PRECISION_SUFFIX if single else "")
                 continue
             code.append(line)
         body = " ".join(code)
-        body = re.sub(r"GS_PRECISION_NAME\s*\(\s*(\w+)\s*\)",
-                      lambda m: m.group(1) + (PRECISION_SUFFIX if single else ""), body)
+        body = re.sub(
+            r"GS_PRECISION_NAME\s*\(\s*(\w+)\s*\)",
+            lambda m: m.group(1) + (PRECISION_SUFFIX if single else ""),
+            body,
+        )
         for m in re.finditer(r"\bGS_API\b([^;{]*)", body):
             decl = m.group(1)
             if "(" in decl:
@@ -67,7 +93,10 @@ def public_api(headers, single):
                 head = re.sub(r"\[[^\]]*\]", " ", decl.split("=", 1)[0])
             names = re.findall(r"[A-Za-z_]\w*", head)
             if not names:
-                raise SystemExit(f"check_exports: cannot parse the GS_API declaration in {header}: {decl.strip()}")
+                raise SystemExit(
+                    "check_exports: cannot parse the GS_API declaration in "
+                    f"{header}: {decl.strip()}"
+                )
             name = renames.get(names[-1], names[-1])
             declared[name] = header.name
     return declared
@@ -75,7 +104,9 @@ def public_api(headers, single):
 
 def exported(library, nm):
     """Returns (defined dynamic symbols of the library, ignored toolchain symbols)."""
-    result = subprocess.run([nm, "-D", "--defined-only", "-P", library], capture_output=True, text=True)
+    result = subprocess.run(
+        [nm, "-D", "--defined-only", "-P", library], capture_output=True, text=True
+    )
     if result.returncode != 0:
         raise SystemExit(f"check_exports: {nm} failed on {library}: {result.stderr.strip()}")
     symbols, ignored = set(), set()
@@ -94,8 +125,12 @@ def exported(library, nm):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--library", required=True, help="the shared library (libgearsim.so)")
-    parser.add_argument("--headers", required=True, help="the public headers' directory (include/gearsim)")
-    parser.add_argument("--single", action="store_true", help="float build: GS_PRECISION_NAME adds _f32")
+    parser.add_argument(
+        "--headers", required=True, help="the public headers' directory (include/gearsim)"
+    )
+    parser.add_argument(
+        "--single", action="store_true", help="float build: GS_PRECISION_NAME adds _f32"
+    )
     parser.add_argument("--nm", default="nm", help="nm program (default: nm)")
     args = parser.parse_args()
 
@@ -104,18 +139,28 @@ def main():
     extra = sorted(symbols - declared.keys())
     missing = sorted(declared.keys() - symbols)
     precision = "float" if args.single else "double"
-    print(f"check_exports: {Path(args.library).name} ({precision}): {len(symbols)} exported symbols, "
-          f"{len(declared)} GS_API declarations in {args.headers}/*.h")
+    print(
+        f"check_exports: {Path(args.library).name} ({precision}): {len(symbols)} exported symbols, "
+        f"{len(declared)} GS_API declarations in {args.headers}/*.h"
+    )
     if ignored:
         print(f"check_exports: ignored (linker/instrumentation): {' '.join(sorted(ignored))}")
     for name in extra:
-        print(f"check_exports: EXTRA   {name}: exported, but no GS_API declaration in the public headers")
+        print(
+            f"check_exports: EXTRA   {name}: exported, "
+            "but no GS_API declaration in the public headers"
+        )
     for name in missing:
-        print(f"check_exports: MISSING {name}: declared GS_API in {declared[name]}, but not exported")
+        print(
+            f"check_exports: MISSING {name}: declared GS_API in {declared[name]}, but not exported"
+        )
     if extra or missing:
         print(f"check_exports: FAIL: {len(extra)} extra, {len(missing)} missing")
         return 1
-    print(f"check_exports: ok: the {len(symbols)} exports are exactly the public API: {' '.join(sorted(symbols))}")
+    print(
+        f"check_exports: ok: the {len(symbols)} exports are exactly the public API: "
+        + " ".join(sorted(symbols))
+    )
     return 0
 
 

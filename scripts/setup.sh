@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs what gearsim needs on a fresh Debian machine: the C toolchain and
-# cmocka from apt (when missing), and a Python virtual environment in .venv
+# Installs what gearsim needs on a fresh Debian machine: the C toolchain,
+# cmocka and clang-format (the C style check of scripts/lint.sh) from apt (when
+# missing), and a Python virtual environment in .venv
 # with the package installed in editable mode, with every extra the scripts
 # and tests use (all: analysis, hil, fmu, bench) and the test tools. Safe to
 # run again.
@@ -9,7 +10,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 need_apt=()
-for pkg in cmake gcc make pkg-config libcmocka-dev "$@"; do
+for pkg in cmake gcc make pkg-config libcmocka-dev clang-format "$@"; do
   dpkg -s "$pkg" >/dev/null 2>&1 || need_apt+=("$pkg")
 done
 if ((${#need_apt[@]})); then

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Runs every gearsim test, installing what is missing first (scripts/setup.sh).
 # The stages, in order (each name runs alone: scripts/test.sh STAGE [STAGE ...]):
+#   lint       the style checks: ruff check and format, clang-format, mypy on
+#              gearsim.analysis (scripts/lint.sh; --fix applies the formatters)
 #   c          the C core in double and float precision (cmocka under CTest)
 #   package    consumers of the installed CMake package and pkg-config file
 #   firmware   Cortex-M4F build, QEMU run bit-exact with the host, size,
@@ -15,7 +17,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-all_stages=(c package firmware hardening fmu python)
+all_stages=(lint c package firmware hardening fmu python)
 if [ "${1:-}" = "--list" ]; then
   printf '%s\n' "${all_stages[@]}"
   exit 0
@@ -34,6 +36,7 @@ started=$SECONDS
 stage() { printf '\n== %s (%ds)\n' "$1" $((SECONDS - started)) >&2; }
 jobs=$(nproc 2>/dev/null || echo 2)
 
+run_lint() { stage "style checks"; scripts/lint.sh; }
 run_c() {
   local precision
   for precision in double float; do   # the presets of CMakePresets.json

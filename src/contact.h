@@ -21,10 +21,10 @@
  * NEWTON_ITERATIONS evaluations. NEWTON_ASYMPTOTIC (about its square root)
  * marks steps small enough for Newton's quadratic error bound to hold. */
 #ifdef GS_SINGLE_PRECISION
-#define NEWTON_TOLERANCE GS_R(1e-6)
+#define NEWTON_TOLERANCE  GS_R(1e-6)
 #define NEWTON_ASYMPTOTIC GS_R(1e-3)
 #else
-#define NEWTON_TOLERANCE GS_R(1e-13)
+#define NEWTON_TOLERANCE  GS_R(1e-13)
 #define NEWTON_ASYMPTOTIC GS_R(3e-7)
 #endif
 
@@ -136,7 +136,7 @@ static inline gs_real residual_at_rest(const gs_mesh_ *m, const gs_contact_step_
  * penetration near first touch, where Newton converges only linearly; fuzz
  * finding), the bracket end nearer v = 0, which is passive. */
 static inline gs_real smooth_root(const gs_mesh_ *m, const gs_contact_step_ *cs, gs_real p0, gs_real v_free,
-                           gs_real guess, gs_real *spring)
+                                  gs_real guess, gs_real *spring)
 {
     const gs_real d = cs->transition;
     const gs_real delta_free = p0 + cs->h * v_free;
@@ -264,7 +264,7 @@ static inline gs_real full_root(const gs_mesh_ *m, const gs_contact_step_ *cs, g
 }
 
 static inline gs_real solve_contact(const gs_mesh_ *m, const gs_contact_step_ *cs, gs_real x, gs_real u_free,
-                             gs_real last_force, gs_real *force, gs_real *f_spring)
+                                    gs_real last_force, gs_real *force, gs_real *f_spring)
 {
     const gs_real x_free = x + cs->h * u_free;
     gs_real side;
@@ -326,8 +326,7 @@ static inline gs_real gs_contact_solve(const gs_mesh_ *m, const gs_contact_step_
     /* Lock a slow impact: at or beyond the stop, closing or stopped (u has
      * the sign of the side, or is zero), never while the teeth separate. */
     const gs_real x_end = x + cs->h * u;
-    if (m->lock_enabled && gs_abs(x_end) >= m->half_gap && gs_abs(u) < m->lock_speed &&
-        x_end * u >= GS_R(0.0)) {
+    if (m->lock_enabled && gs_abs(x_end) >= m->half_gap && gs_abs(u) < m->lock_speed && x_end * u >= GS_R(0.0)) {
         *locked = 1;
     }
     return u;

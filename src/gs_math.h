@@ -30,10 +30,22 @@ static inline gs_real gs_abs(gs_real x)
 #define GS_NOINLINE
 #endif
 
-static inline gs_real gs_min(gs_real a, gs_real b) { return a < b ? a : b; }
-static inline gs_real gs_max(gs_real a, gs_real b) { return a > b ? a : b; }
-static inline gs_real gs_clamp(gs_real x, gs_real lo, gs_real hi) { return gs_min(gs_max(x, lo), hi); }
-static inline gs_real gs_sign(gs_real x) { return x > GS_R(0.0) ? GS_R(1.0) : (x < GS_R(0.0) ? GS_R(-1.0) : GS_R(0.0)); }
+static inline gs_real gs_min(gs_real a, gs_real b)
+{
+    return a < b ? a : b;
+}
+static inline gs_real gs_max(gs_real a, gs_real b)
+{
+    return a > b ? a : b;
+}
+static inline gs_real gs_clamp(gs_real x, gs_real lo, gs_real hi)
+{
+    return gs_min(gs_max(x, lo), hi);
+}
+static inline gs_real gs_sign(gs_real x)
+{
+    return x > GS_R(0.0) ? GS_R(1.0) : (x < GS_R(0.0) ? GS_R(-1.0) : GS_R(0.0));
+}
 /* Finite test without libm: NaN fails both comparisons, infinities the bound. */
 static inline int gs_is_finite(gs_real x)
 {
@@ -49,9 +61,13 @@ static inline int gs_is_finite(gs_real x)
 static inline gs_real gs_exp_neg(gs_real z)
 {
     const gs_real y = z * GS_R(0.0009765625);
-    gs_real p = GS_R(1.0) - y * (GS_R(1.0) - y * (GS_R(0.5) - y * (GS_R(1.0) / GS_R(6.0)
-                  - y * (GS_R(1.0) / GS_R(24.0) - y * (GS_R(1.0) / GS_R(120.0)
-                  - y * (GS_R(1.0) / GS_R(720.0) - y * (GS_R(1.0) / GS_R(5040.0))))))));
+    gs_real p =
+        GS_R(1.0) -
+        y * (GS_R(1.0) -
+             y * (GS_R(0.5) - y * (GS_R(1.0) / GS_R(6.0) -
+                                   y * (GS_R(1.0) / GS_R(24.0) -
+                                        y * (GS_R(1.0) / GS_R(120.0) -
+                                             y * (GS_R(1.0) / GS_R(720.0) - y * (GS_R(1.0) / GS_R(5040.0))))))));
     for (int i = 0; i < 10; ++i) {
         p = p * p;
     }
@@ -67,8 +83,8 @@ static inline gs_real gs_tanh(gs_real x)
     gs_real r;
     if (a < GS_R(0.5)) {
         const gs_real a2 = a * a;
-        r = a * (GS_R(135135.0) + a2 * (GS_R(17325.0) + a2 * (GS_R(378.0) + a2)))
-            / (GS_R(135135.0) + a2 * (GS_R(62370.0) + a2 * (GS_R(3150.0) + a2 * GS_R(28.0))));
+        r = a * (GS_R(135135.0) + a2 * (GS_R(17325.0) + a2 * (GS_R(378.0) + a2))) /
+            (GS_R(135135.0) + a2 * (GS_R(62370.0) + a2 * (GS_R(3150.0) + a2 * GS_R(28.0))));
     } else if (a < GS_R(19.0)) {
         const gs_real e = gs_exp_neg(GS_R(2.0) * a);
         r = (GS_R(1.0) - e) / (GS_R(1.0) + e);
@@ -88,13 +104,13 @@ static inline gs_real gs_reduce_angle(gs_real x)
 #ifdef GS_SINGLE_PRECISION
     const gs_real two_pi_hi = GS_R(6.28318548202514648);
     const gs_real two_pi_lo = GS_R(-1.74845553e-07);
-    const gs_real round_magic = GS_R(12582912.0);  /* 1.5*2^23 */
-    const gs_real exact_limit = GS_R(4194304.0);   /* 2^22 */
+    const gs_real round_magic = GS_R(12582912.0); /* 1.5*2^23 */
+    const gs_real exact_limit = GS_R(4194304.0);  /* 2^22 */
 #else
     const gs_real two_pi_hi = GS_R(6.283185307179586);
     const gs_real two_pi_lo = GS_R(2.4492935982947064e-16);
-    const gs_real round_magic = GS_R(6755399441055744.0);  /* 1.5*2^52 */
-    const gs_real exact_limit = GS_R(2251799813685248.0);  /* 2^51 */
+    const gs_real round_magic = GS_R(6755399441055744.0); /* 1.5*2^52 */
+    const gs_real exact_limit = GS_R(2251799813685248.0); /* 2^51 */
 #endif
     const gs_real turns = x * GS_R(0.15915494309189535);
     if (!(gs_abs(turns) < exact_limit)) {
@@ -124,29 +140,51 @@ static inline void gs_cos_sin(gs_real angle, gs_real *c, gs_real *s)
 #ifdef GS_SINGLE_PRECISION
     /* to t^10 and t^11: the next terms are below 1.2e-10 */
     const gs_real cos_t =
-        GS_R(1.0) - t2 * (GS_R(0.5) - t2 * (GS_R(1.0) / GS_R(24.0) - t2 * (GS_R(1.0) / GS_R(720.0)
-        - t2 * (GS_R(1.0) / GS_R(40320.0) - t2 * (GS_R(1.0) / GS_R(3628800.0))))));
+        GS_R(1.0) - t2 * (GS_R(0.5) - t2 * (GS_R(1.0) / GS_R(24.0) - t2 * (GS_R(1.0) / GS_R(720.0) -
+                                                                           t2 * (GS_R(1.0) / GS_R(40320.0) -
+                                                                                 t2 * (GS_R(1.0) / GS_R(3628800.0))))));
     const gs_real sin_t =
-        t * (GS_R(1.0) - t2 * (GS_R(1.0) / GS_R(6.0) - t2 * (GS_R(1.0) / GS_R(120.0)
-        - t2 * (GS_R(1.0) / GS_R(5040.0) - t2 * (GS_R(1.0) / GS_R(362880.0)
-        - t2 * (GS_R(1.0) / GS_R(39916800.0)))))));
+        t * (GS_R(1.0) - t2 * (GS_R(1.0) / GS_R(6.0) -
+                               t2 * (GS_R(1.0) / GS_R(120.0) -
+                                     t2 * (GS_R(1.0) / GS_R(5040.0) -
+                                           t2 * (GS_R(1.0) / GS_R(362880.0) - t2 * (GS_R(1.0) / GS_R(39916800.0)))))));
 #else
     const gs_real cos_t =
-        GS_R(1.0) - t2 * (GS_R(0.5) - t2 * (GS_R(1.0) / GS_R(24.0) - t2 * (GS_R(1.0) / GS_R(720.0)
-        - t2 * (GS_R(1.0) / GS_R(40320.0) - t2 * (GS_R(1.0) / GS_R(3628800.0)
-        - t2 * (GS_R(1.0) / GS_R(479001600.0) - t2 * (GS_R(1.0) / GS_R(87178291200.0)
-        - t2 * (GS_R(1.0) / GS_R(20922789888000.0)))))))));
+        GS_R(1.0) -
+        t2 * (GS_R(0.5) - t2 * (GS_R(1.0) / GS_R(24.0) -
+                                t2 * (GS_R(1.0) / GS_R(720.0) -
+                                      t2 * (GS_R(1.0) / GS_R(40320.0) -
+                                            t2 * (GS_R(1.0) / GS_R(3628800.0) -
+                                                  t2 * (GS_R(1.0) / GS_R(479001600.0) -
+                                                        t2 * (GS_R(1.0) / GS_R(87178291200.0) -
+                                                              t2 * (GS_R(1.0) / GS_R(20922789888000.0)))))))));
     const gs_real sin_t =
-        t * (GS_R(1.0) - t2 * (GS_R(1.0) / GS_R(6.0) - t2 * (GS_R(1.0) / GS_R(120.0)
-        - t2 * (GS_R(1.0) / GS_R(5040.0) - t2 * (GS_R(1.0) / GS_R(362880.0)
-        - t2 * (GS_R(1.0) / GS_R(39916800.0) - t2 * (GS_R(1.0) / GS_R(6227020800.0)
-        - t2 * (GS_R(1.0) / GS_R(1307674368000.0)))))))));
+        t *
+        (GS_R(1.0) -
+         t2 * (GS_R(1.0) / GS_R(6.0) -
+               t2 * (GS_R(1.0) / GS_R(120.0) -
+                     t2 * (GS_R(1.0) / GS_R(5040.0) - t2 * (GS_R(1.0) / GS_R(362880.0) -
+                                                            t2 * (GS_R(1.0) / GS_R(39916800.0) -
+                                                                  t2 * (GS_R(1.0) / GS_R(6227020800.0) -
+                                                                        t2 * (GS_R(1.0) / GS_R(1307674368000.0)))))))));
 #endif
-    switch ((q + 4) % 4) {  /* q in [-2, 2] for |angle| <= pi */
-    case 0: *c = cos_t; *s = sin_t; break;
-    case 1: *c = -sin_t; *s = cos_t; break;
-    case 2: *c = -cos_t; *s = -sin_t; break;
-    default: *c = sin_t; *s = -cos_t; break;
+    switch ((q + 4) % 4) { /* q in [-2, 2] for |angle| <= pi */
+    case 0:
+        *c = cos_t;
+        *s = sin_t;
+        break;
+    case 1:
+        *c = -sin_t;
+        *s = cos_t;
+        break;
+    case 2:
+        *c = -cos_t;
+        *s = -sin_t;
+        break;
+    default:
+        *c = sin_t;
+        *s = -cos_t;
+        break;
     }
 }
 

@@ -4,8 +4,7 @@
 #include "contact.h"
 
 /* Force and its derivative along u when x = x0 + h*u (dfdu = h*df/dx + df/dv). */
-static gs_real contact_force_d(const gs_mesh_ *m, gs_real x, gs_real u, gs_real h,
-                               gs_real *dfdu, gs_real *f_spring)
+static gs_real contact_force_d(const gs_mesh_ *m, gs_real x, gs_real u, gs_real h, gs_real *dfdu, gs_real *f_spring)
 {
     gs_real delta;
     gs_real side;
@@ -64,8 +63,8 @@ gs_real gs_contact_energy(const gs_mesh_ *m, gs_real x)
         const gs_real d = GS_R(1.0) / m->inv_transition;
         const gs_real s = gs_min(delta, d);
         const gs_real s2 = s * s;
-        const gs_real ramp = m->stiffness * s2 * s2 * m->inv_transition * m->inv_transition
-                             * (GS_R(0.75) - GS_R(0.4) * s * m->inv_transition);
+        const gs_real ramp = m->stiffness * s2 * s2 * m->inv_transition * m->inv_transition *
+                             (GS_R(0.75) - GS_R(0.4) * s * m->inv_transition);
         if (delta > d) {
             return ramp + GS_R(0.5) * m->stiffness * (delta * delta - d * d);
         }

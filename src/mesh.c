@@ -6,8 +6,8 @@
 /* The published size of gs_simple_gear_consts and gs_rack_pinion_consts. */
 GS_CONSTS_REALS_CHECK_(GS_BLOCK_CONSTS_REALS, gs_mesh_);
 
-gs_status gs_mesh_set_backlash(gs_mesh_ *m, const gs_backlash_params *p, gs_real base_radius,
-                               gs_real follower_radius, gs_error *err)
+gs_status gs_mesh_set_backlash(gs_mesh_ *m, const gs_backlash_params *p, gs_real base_radius, gs_real follower_radius,
+                               gs_error *err)
 {
     m->backlash = p->enabled ? 1 : 0;
     m->base_radius = base_radius;
@@ -53,8 +53,7 @@ gs_status gs_mesh_set_backlash(gs_mesh_ *m, const gs_backlash_params *p, gs_real
     }
     m->hard_stop = p->hard_stop_model;
     m->half_gap = half_gap;
-    m->inv_transition = p->hard_stop_model == GS_HARD_STOP_SMOOTH ? GS_R(1.0) / p->transition_region_m
-                                                                  : GS_R(0.0);
+    m->inv_transition = p->hard_stop_model == GS_HARD_STOP_SMOOTH ? GS_R(1.0) / p->transition_region_m : GS_R(0.0);
     m->stiffness = p->stiffness_N_m;
     m->damping = p->damping_N_s_m;
     m->initial_position = p->initial_position_m;
@@ -65,8 +64,7 @@ gs_status gs_mesh_set_backlash(gs_mesh_ *m, const gs_backlash_params *p, gs_real
     return GS_OK;
 }
 
-gs_status gs_mesh_set_thermal(gs_mesh_ *m, gs_real thermal_mass, gs_real initial_temperature,
-                              gs_error *err)
+gs_status gs_mesh_set_thermal(gs_mesh_ *m, gs_real thermal_mass, gs_real initial_temperature, gs_error *err)
 {
     m->thermal_enabled = (m->friction == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY ||
                           m->friction == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY);
@@ -85,8 +83,7 @@ gs_status gs_mesh_set_thermal(gs_mesh_ *m, gs_real thermal_mass, gs_real initial
     return GS_OK;
 }
 
-void gs_mesh_set_temperature_table(gs_mesh_ *m, const gs_real *temperature, const gs_real *eta,
-                                   int n)
+void gs_mesh_set_temperature_table(gs_mesh_ *m, const gs_real *temperature, const gs_real *eta, int n)
 {
     m->table.eta_of_T.n = n;
     for (int i = 0; i < n; ++i) {
@@ -104,20 +101,19 @@ void gs_mesh_reset(const gs_mesh_ *m, gs_block_state *st)
     st->contact_locked = 0;
 }
 
-void gs_mesh_thermal_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, gs_real loss_W,
-                          gs_real q_W, gs_real ambient_K, gs_real conductance_W_K)
+void gs_mesh_thermal_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, gs_real loss_W, gs_real q_W,
+                          gs_real ambient_K, gs_real conductance_W_K)
 {
     if (!m->thermal_enabled) {
         return;
     }
     /* C dT/dt = P + q + G (T_amb - T): the ambient term implicit, the rest explicit. */
     const gs_real a = dt / m->thermal_mass;
-    st->temperature = (st->temperature + a * (loss_W + q_W + conductance_W_K * ambient_K))
-                     / (GS_R(1.0) + a * conductance_W_K);
+    st->temperature =
+        (st->temperature + a * (loss_W + q_W + conductance_W_K * ambient_K)) / (GS_R(1.0) + a * conductance_W_K);
 }
 
-void gs_mesh_block_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, const gs_mesh_in_ *in,
-                        gs_mesh_out_ *out)
+void gs_mesh_block_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, const gs_mesh_in_ *in, gs_mesh_out_ *out)
 {
     gs_loss_ctx_ ctx;
     const gs_real temperature = in->use_temperature ? in->temperature : st->temperature;
@@ -145,8 +141,7 @@ void gs_mesh_block_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, const
         st->contact_force = f;
     }
     const gs_real p_mesh = tau_mesh * w_f;
-    const gs_real p_loss = p_mesh + m->mu_base * w_b * w_b + m->mu_follower * w_f * w_f
-                           + (f - f_spring) * u;
+    const gs_real p_loss = p_mesh + m->mu_base * w_b * w_b + m->mu_follower * w_f * w_f + (f - f_spring) * u;
     if (in->use_temperature) {
         st->temperature = in->temperature;
     } else {

@@ -18,8 +18,8 @@ typedef struct {
 } gs_table1_;
 
 typedef struct {
-    gs_real x[GS_TABLE_MAX];       /* rows: temperature, K */
-    gs_real y[GS_TABLE_MAX];       /* columns: base load, N*m */
+    gs_real x[GS_TABLE_MAX]; /* rows: temperature, K */
+    gs_real y[GS_TABLE_MAX]; /* columns: base load, N*m */
     gs_real z[GS_TABLE_MAX][GS_TABLE_MAX];
     int nx;
     int ny;
@@ -28,28 +28,28 @@ typedef struct {
 /* The mesh shared by both blocks: omega_F = inv_ratio * omega_B, where
  * inv_ratio = s/g (Simple Gear) or s_R*r_P (Rack & Pinion, follower = rack). */
 typedef struct {
-    gs_real inv_ratio;          /* omega_F / omega_B (signed) */
-    gs_real base_radius;        /* r_B or r_P, m (backlash geometry) */
-    gs_real follower_radius;    /* r_F (m) or 1 for the rack */
-    gs_real direction;          /* s or s_R, +1 or -1 */
-    gs_real mu_base;            /* viscous, N*m/(rad/s) */
-    gs_real mu_follower;        /* viscous, N*m/(rad/s) or N/(m/s) */
+    gs_real inv_ratio;       /* omega_F / omega_B (signed) */
+    gs_real base_radius;     /* r_B or r_P, m (backlash geometry) */
+    gs_real follower_radius; /* r_F (m) or 1 for the rack */
+    gs_real direction;       /* s or s_R, +1 or -1 */
+    gs_real mu_base;         /* viscous, N*m/(rad/s) */
+    gs_real mu_follower;     /* viscous, N*m/(rad/s) or N/(m/s) */
     gs_friction_model friction;
     gs_loss_smoothing smoothing;
-    gs_real eta;                /* constant efficiency */
-    gs_real inv_power_threshold;/* 1/p_th, 1/W */
-    gs_real coulomb_idle;       /* g*tau_idle, follower-referred, N*m */
-    gs_real load_slope;         /* k of eq. 2.5 */
-    gs_real inv_speed_threshold;/* 1/omega_th */
-    gs_real base_load_scale;    /* |T_F| -> base load: 1/g */
+    gs_real eta;                 /* constant efficiency */
+    gs_real inv_power_threshold; /* 1/p_th, 1/W */
+    gs_real coulomb_idle;        /* g*tau_idle, follower-referred, N*m */
+    gs_real load_slope;          /* k of eq. 2.5 */
+    gs_real inv_speed_threshold; /* 1/omega_th */
+    gs_real base_load_scale;     /* |T_F| -> base load: 1/g */
     int thermal_enabled;
-    gs_real thermal_mass;       /* J/K */
-    gs_real initial_temperature;/* K */
+    gs_real thermal_mass;        /* J/K */
+    gs_real initial_temperature; /* K */
     /* backlash */
     int backlash;
     gs_hard_stop_model hard_stop;
-    gs_real half_gap;           /* b/2, m */
-    gs_real inv_transition;     /* 1/d */
+    gs_real half_gap;       /* b/2, m */
+    gs_real inv_transition; /* 1/d */
     gs_real stiffness;
     gs_real damping;
     gs_real initial_position;
@@ -60,8 +60,8 @@ typedef struct {
     /* The efficiency table of the friction model in use: only one law is
      * active, so the tables share their storage. */
     union {
-        gs_table1_ eta_of_T;        /* temperature-dependent efficiency */
-        gs_table2_ eta_of_T_load;   /* temperature- and load-dependent efficiency */
+        gs_table1_ eta_of_T;      /* temperature-dependent efficiency */
+        gs_table2_ eta_of_T_load; /* temperature- and load-dependent efficiency */
     } table;
 } gs_mesh_;
 
@@ -107,7 +107,7 @@ typedef struct {
 } gs_real_alignment_probe_;
 #define GS_EXACT_CONSTS_ABI_ \
     (sizeof(gs_friction_model) == sizeof(int) && sizeof(gs_real_alignment_probe_) == 2u * sizeof(gs_real))
-#define GS_CONSTS_REALS_CHECK_(macro, internal)                                                      \
+#define GS_CONSTS_REALS_CHECK_(macro, internal)                                                       \
     GS_STATIC_ASSERT_(macro##_holds_internal, (size_t)(macro) * sizeof(gs_real) >= sizeof(internal)); \
     extern char gs_set_##macro##_to[macro];                                                           \
     extern char gs_set_##macro##_to[GS_EXACT_CONSTS_ABI_ ? GS_REALS_FOR_(sizeof(internal)) : (size_t)(macro)]
@@ -115,21 +115,19 @@ typedef struct {
 /* Mesh-loss quantities that depend only on the temperature, evaluated once
  * per step. */
 typedef struct {
-    gs_real loss_forward;   /* L_fd = 1 - eta       (follower driving) */
-    gs_real loss_backward;  /* L_bd = 1/eta - 1     (base driving) */
+    gs_real loss_forward;              /* L_fd = 1 - eta       (follower driving) */
+    gs_real loss_backward;             /* L_bd = 1/eta - 1     (base driving) */
     gs_real eta_of_load[GS_TABLE_MAX]; /* 2-D table collapsed at the temperature */
 } gs_loss_ctx_;
 
 /* Common mesh set-up (the block inits call these after their own checks). */
-gs_status gs_mesh_set_backlash(gs_mesh_ *m, const gs_backlash_params *p, gs_real base_radius,
-                               gs_real follower_radius, gs_error *err);
-gs_status gs_mesh_set_thermal(gs_mesh_ *m, gs_real thermal_mass, gs_real initial_temperature,
-                              gs_error *err);
+gs_status gs_mesh_set_backlash(gs_mesh_ *m, const gs_backlash_params *p, gs_real base_radius, gs_real follower_radius,
+                               gs_error *err);
+gs_status gs_mesh_set_thermal(gs_mesh_ *m, gs_real thermal_mass, gs_real initial_temperature, gs_error *err);
 /* The initial state of a mesh. */
 void gs_mesh_reset(const gs_mesh_ *m, gs_block_state *st);
 /* Copies a validated temperature -> efficiency table into the mesh. */
-void gs_mesh_set_temperature_table(gs_mesh_ *m, const gs_real *temperature, const gs_real *eta,
-                                   int n);
+void gs_mesh_set_temperature_table(gs_mesh_ *m, const gs_real *temperature, const gs_real *eta, int n);
 
 /* Meshing loss (mesh_loss.c). */
 void gs_mesh_loss_prepare(const gs_mesh_ *m, gs_real temperature, gs_loss_ctx_ *ctx);
@@ -161,8 +159,7 @@ typedef struct {
 
 /* The law's coefficients for the step. The 2-D table reads its efficiency
  * at the base load |load_estimate|/g (a recent T_F). */
-void gs_mesh_friction_law(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real load_estimate,
-                          gs_mesh_friction_ *law);
+void gs_mesh_friction_law(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real load_estimate, gs_mesh_friction_ *law);
 /* The loss torque of the law sliding with follower speed w (w != 0) under
  * the net follower torque t_f; 0 for w = 0. */
 static inline gs_real gs_mesh_friction_torque(const gs_mesh_friction_ *law, gs_real t_f, gs_real w)
@@ -188,8 +185,8 @@ void gs_contact_prepare(const gs_mesh_ *m, gs_real h, gs_real inv_mass, gs_conta
 
 /* Thermal mass: explicit heat flow q_W, or an ambient path through
  * conductance g_W_K treated implicitly (stable for any thermal mass). */
-void gs_mesh_thermal_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, gs_real loss_W,
-                          gs_real q_W, gs_real ambient_K, gs_real conductance_W_K);
+void gs_mesh_thermal_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, gs_real loss_W, gs_real q_W,
+                          gs_real ambient_K, gs_real conductance_W_K);
 
 /* Block-level step shared by both blocks: rigid (form A) or backlash (form C). */
 typedef struct {
@@ -197,10 +194,9 @@ typedef struct {
     int use_temperature;
 } gs_mesh_in_;
 typedef struct {
-    gs_real base_torque, follower_torque, follower_speed, loss_torque, mesh_loss_power,
-        loss_power, temperature, position, contact_force;
+    gs_real base_torque, follower_torque, follower_speed, loss_torque, mesh_loss_power, loss_power, temperature,
+        position, contact_force;
 } gs_mesh_out_;
-void gs_mesh_block_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, const gs_mesh_in_ *in,
-                        gs_mesh_out_ *out);
+void gs_mesh_block_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, const gs_mesh_in_ *in, gs_mesh_out_ *out);
 
 #endif /* GS_MESH_H */

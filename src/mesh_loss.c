@@ -50,8 +50,7 @@ void gs_mesh_loss_prepare(const gs_mesh_ *m, gs_real temperature, gs_loss_ctx_ *
 /* Loss factor c with tau_mesh = T*c of the power-smoothed efficiency laws
  * (2.1/2.2): loss_pos where the power T*w is positive, loss_neg where it is
  * negative, blended by t = tanh(4*T*w/p_th). */
-static gs_real power_smoothed_factor(const gs_mesh_ *m, gs_real T, gs_real w, gs_real loss_pos,
-                                     gs_real loss_neg)
+static gs_real power_smoothed_factor(const gs_mesh_ *m, gs_real T, gs_real w, gs_real loss_pos, gs_real loss_neg)
 {
     const gs_real t = gs_tanh(GS_R(4.0) * T * w * m->inv_power_threshold);
     if (m->smoothing == GS_SMOOTHING_SIMSCAPE) {
@@ -61,8 +60,7 @@ static gs_real power_smoothed_factor(const gs_mesh_ *m, gs_real T, gs_real w, gs
 }
 
 /* On the follower torque T_F (rigid mesh): L_fd when the follower drives. */
-static gs_real efficiency_loss_factor(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T,
-                                      gs_real w)
+static gs_real efficiency_loss_factor(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T, gs_real w)
 {
     return power_smoothed_factor(m, T, w, ctx->loss_forward, ctx->loss_backward);
 }
@@ -88,8 +86,8 @@ gs_real gs_mesh_loss_torque(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real 
         return T * efficiency_loss_factor(m, ctx, T, w);
     case GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY:
     case GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY:
-        return (m->coulomb_idle + coulomb_slope(m, ctx, T) * gs_abs(T))
-               * gs_tanh(GS_R(4.0) * w * m->inv_speed_threshold);
+        return (m->coulomb_idle + coulomb_slope(m, ctx, T) * gs_abs(T)) *
+               gs_tanh(GS_R(4.0) * w * m->inv_speed_threshold);
     }
     return GS_R(0.0);
 }
@@ -136,8 +134,7 @@ gs_real gs_mesh_loss_from_tooth(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_r
     return GS_R(0.0);
 }
 
-void gs_mesh_friction_law(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real load_estimate,
-                          gs_mesh_friction_ *law)
+void gs_mesh_friction_law(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real load_estimate, gs_mesh_friction_ *law)
 {
     law->c0 = GS_R(0.0);
     law->lossy = 1;
@@ -175,4 +172,3 @@ void gs_mesh_friction_law(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real lo
     }
     }
 }
-

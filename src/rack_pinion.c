@@ -41,7 +41,7 @@ gs_rack_pinion_params gs_rack_pinion_params_default(void)
 gs_real gs_rack_pinion_radius(const gs_rack_pinion_params *params)
 {
     if (params->parameterization == GS_PARAMETERIZE_TOOTH_PARAMETERS) {
-        return params->teeth_count * params->spacing_m / GS_TWO_PI;   /* eq. 6.2 */
+        return params->teeth_count * params->spacing_m / GS_TWO_PI; /* eq. 6.2 */
     }
     return params->pinion_radius_m;
 }
@@ -70,9 +70,14 @@ gs_status gs_rack_pinion_mesh(gs_mesh_ *mesh, const gs_rack_pinion_params *p, gs
     }
     gs_real direction;
     switch (p->rack_directionality) {
-    case GS_RACK_POSITIVE: direction = GS_R(1.0); break;
-    case GS_RACK_NEGATIVE: direction = GS_R(-1.0); break;
-    default: return gs_fail(err, GS_E_OPTION, "rack_directionality");
+    case GS_RACK_POSITIVE:
+        direction = GS_R(1.0);
+        break;
+    case GS_RACK_NEGATIVE:
+        direction = GS_R(-1.0);
+        break;
+    default:
+        return gs_fail(err, GS_E_OPTION, "rack_directionality");
     }
     switch (p->loss_smoothing) {
     case GS_SMOOTHING_PASSIVE:
@@ -106,8 +111,9 @@ gs_status gs_rack_pinion_mesh(gs_mesh_ *mesh, const gs_rack_pinion_params *p, gs
         return s;
     }
     const gs_real radius = gs_rack_pinion_radius(p);
-    if ((s = gs_check_invertible(err, radius, p->parameterization == GS_PARAMETERIZE_TOOTH_PARAMETERS
-                                                  ? "spacing" : "pinion_radius")) != GS_OK) {
+    if ((s = gs_check_invertible(
+             err, radius, p->parameterization == GS_PARAMETERIZE_TOOTH_PARAMETERS ? "spacing" : "pinion_radius")) !=
+        GS_OK) {
         return s;
     }
     gs_mesh_ m;
@@ -122,8 +128,7 @@ gs_status gs_rack_pinion_mesh(gs_mesh_ *mesh, const gs_rack_pinion_params *p, gs
     m.inv_power_threshold = GS_R(1.0) / p->power_threshold_W;
     m.base_load_scale = radius;
     if (p->friction_model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY) {
-        gs_mesh_set_temperature_table(&m, p->temperature_vector_K, p->efficiency_vector,
-                                      p->temperature_count);
+        gs_mesh_set_temperature_table(&m, p->temperature_vector_K, p->efficiency_vector, p->temperature_count);
     }
     if ((s = gs_mesh_set_thermal(&m, p->thermal_mass_J_K, p->initial_temperature_K, err)) != GS_OK ||
         (s = gs_mesh_set_backlash(&m, &p->backlash, radius, GS_R(1.0), err)) != GS_OK) {
@@ -142,8 +147,8 @@ static const gs_mesh_ *rack_mesh(const gs_rack_pinion_consts *consts)
     return (const gs_mesh_ *)(const void *)consts;
 }
 
-gs_status gs_rack_pinion_init(gs_rack_pinion_consts *consts, gs_block_state *state,
-                              const gs_rack_pinion_params *params, gs_error *err)
+gs_status gs_rack_pinion_init(gs_rack_pinion_consts *consts, gs_block_state *state, const gs_rack_pinion_params *params,
+                              gs_error *err)
 {
     if (consts == NULL || state == NULL) {
         return gs_fail(err, GS_E_NULL, consts == NULL ? "consts" : "state");
@@ -165,7 +170,7 @@ void gs_rack_pinion_step(const gs_rack_pinion_consts *consts, gs_block_state *st
                          const gs_rack_ports_in *in, gs_rack_ports_out *out)
 {
     const gs_mesh_in_ mi = {in->pinion_speed_rad_s, in->rack_velocity_m_s, in->rack_force_N,
-                            in->heat_flow_W, in->temperature_K, in->use_temperature_input};
+                            in->heat_flow_W,        in->temperature_K,     in->use_temperature_input};
     gs_mesh_out_ mo;
     gs_mesh_block_step(rack_mesh(consts), state, dt_s, &mi, &mo);
     out->pinion_torque_Nm = mo.base_torque;

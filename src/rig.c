@@ -89,7 +89,8 @@ static gs_status check_ripple(const gs_rig_params *p, gs_error *err)
     gs_status s;
     int mesh_harmonics = 0;
     for (int i = 0; i < GS_RIPPLE_HARMONICS; ++i) {
-        if ((s = gs_check_nonnegative(err, p->ripple_revolution_amplitude_Nm[i], "ripple_revolution_amplitude")) != GS_OK ||
+        if ((s = gs_check_nonnegative(err, p->ripple_revolution_amplitude_Nm[i], "ripple_revolution_amplitude")) !=
+                GS_OK ||
             (s = gs_check_finite(err, p->ripple_revolution_phase_rad[i], "ripple_revolution_phase")) != GS_OK ||
             (s = gs_check_nonnegative(err, p->ripple_mesh_amplitude_Nm[i], "ripple_mesh_amplitude")) != GS_OK ||
             (s = gs_check_finite(err, p->ripple_mesh_phase_rad[i], "ripple_mesh_phase")) != GS_OK) {
@@ -171,8 +172,7 @@ static gs_real base_inverse_mass(const rig_consts_ *r, gs_real h)
 static gs_real contact_inverse_mass(const rig_consts_ *r, gs_real h)
 {
     const gs_mesh_ *m = &r->mesh;
-    return m->follower_radius * m->follower_radius / (r->driven_inertia + h * m->mu_follower)
-           + base_inverse_mass(r, h);
+    return m->follower_radius * m->follower_radius / (r->driven_inertia + h * m->mu_follower) + base_inverse_mass(r, h);
 }
 
 /* Smallest count with (h*omega_n)^2 <= 0.25, i.e. h*omega_n <= 0.5, capped:
@@ -315,21 +315,19 @@ static void rig_fill(rig_consts_ *r, const gs_rig_params *p)
         const gs_real inv_eff_mass = contact_inverse_mass(r, r->substep); /* 1/m_eff at the pitch line, 1/kg */
         gs_contact_prepare(&r->mesh, r->substep, inv_eff_mass, &r->contact);
         if (r->base_drive == GS_BASE_TORQUE_DRIVEN) {
-            gs_contact_prepare(&r->mesh, r->substep,
-                               base_inverse_mass(r, r->substep), &r->contact_stuck);
+            gs_contact_prepare(&r->mesh, r->substep, base_inverse_mass(r, r->substep), &r->contact_stuck);
         }
         r->contact_h_omega_n = contact_h_omega_n(r, r->substep, inv_eff_mass);
         r->substeps_capped = p->contact_substeps == 0 && r->contact_h_omega_n > GS_R(0.5);
     }
-    r->loss_static = r->mesh.friction == GS_FRICTION_NONE || r->mesh.friction == GS_FRICTION_CONSTANT_EFFICIENCY
-                     || r->mesh.friction == GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY;
+    r->loss_static = r->mesh.friction == GS_FRICTION_NONE || r->mesh.friction == GS_FRICTION_CONSTANT_EFFICIENCY ||
+                     r->mesh.friction == GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY;
     memset(&r->loss_ctx, 0, sizeof r->loss_ctx);
     gs_mesh_loss_prepare(&r->mesh, r->mesh.initial_temperature, &r->loss_ctx);
     gs_mesh_friction_law(&r->mesh, &r->loss_ctx, GS_R(0.0), &r->loss_law);
     r->stribeck = p->load_breakaway_friction > GS_R(0.0);
     r->stribeck_excess = r->stribeck ? p->load_breakaway_friction - p->load_coulomb_friction : GS_R(0.0);
-    r->inv_stribeck_speed_sq =
-        r->stribeck ? GS_R(1.0) / (p->load_stribeck_speed * p->load_stribeck_speed) : GS_R(0.0);
+    r->inv_stribeck_speed_sq = r->stribeck ? GS_R(1.0) / (p->load_stribeck_speed * p->load_stribeck_speed) : GS_R(0.0);
     compliance_fill(r, p);
     ripple_fill(r, p);
 }
@@ -337,9 +335,8 @@ static void rig_fill(rig_consts_ *r, const gs_rig_params *p)
 /* The rig parameters are checked first, so that once the block's mesh is
  * validated (and only then written into consts) nothing can fail: a failed
  * init leaves consts and state unchanged. */
-gs_status gs_rig_init_gear(gs_rig_consts *consts, gs_rig_state *state,
-                           const gs_simple_gear_params *gear, const gs_rig_params *params,
-                           gs_error *err)
+gs_status gs_rig_init_gear(gs_rig_consts *consts, gs_rig_state *state, const gs_simple_gear_params *gear,
+                           const gs_rig_params *params, gs_error *err)
 {
     if (consts == NULL || state == NULL || gear == NULL || params == NULL) {
         return gs_fail(err, GS_E_NULL,
@@ -354,9 +351,8 @@ gs_status gs_rig_init_gear(gs_rig_consts *consts, gs_rig_state *state,
     return s;
 }
 
-gs_status gs_rig_init_rack(gs_rig_consts *consts, gs_rig_state *state,
-                           const gs_rack_pinion_params *rack, const gs_rig_params *params,
-                           gs_error *err)
+gs_status gs_rig_init_rack(gs_rig_consts *consts, gs_rig_state *state, const gs_rack_pinion_params *rack,
+                           const gs_rig_params *params, gs_error *err)
 {
     if (consts == NULL || state == NULL || rack == NULL || params == NULL) {
         return gs_fail(err, GS_E_NULL,
@@ -385,8 +381,7 @@ void gs_rig_reset(const gs_rig_consts *consts, gs_rig_state *st)
     st->shaft_twist = GS_R(0.0);
 }
 
-void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *st, const gs_rig_input *in,
-                 gs_rig_output *out)
+void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *st, const gs_rig_input *in, gs_rig_output *out)
 {
     const rig_consts_ *r = consts_of(consts);
     const gs_mesh_ *m = &r->mesh;
@@ -463,8 +458,7 @@ void gs_rig_get_info(const gs_rig_consts *consts, gs_rig_info *info)
     info->compliance_h_omega_n = r->compliance_h_omega_n;
 }
 
-void gs_rig_run(const gs_rig_consts *consts, gs_rig_state *state, size_t n, const gs_rig_input *in,
-                gs_rig_output *out)
+void gs_rig_run(const gs_rig_consts *consts, gs_rig_state *state, size_t n, const gs_rig_input *in, gs_rig_output *out)
 {
     for (size_t i = 0; i < n; ++i) {
         gs_rig_step(consts, state, &in[i], &out[i]);
@@ -473,7 +467,7 @@ void gs_rig_run(const gs_rig_consts *consts, gs_rig_state *state, size_t n, cons
 
 /* ---- The field tables of gearsim/fields.h, for generic readers (Python, tools). */
 #define GS_IS_INT_gs_real 0
-#define GS_IS_INT_int 1
+#define GS_IS_INT_int     1
 #define GS_INPUT_INFO_(type, name, gear_unit, rack_unit, doc) \
     {#name, gear_unit, rack_unit, doc, offsetof(gs_rig_input, name), GS_IS_INT_##type},
 #define GS_OUTPUT_INFO_(type, name, gear_unit, rack_unit, doc) \
@@ -485,5 +479,5 @@ void gs_rig_run(const gs_rig_consts *consts, gs_rig_state *state, size_t n, cons
 
 const gs_field_info gs_rig_input_info[GS_RIG_INPUT_FIELDS] = {GS_RIG_INPUT_LIST(GS_INPUT_INFO_)};
 const gs_field_info gs_rig_output_info[GS_RIG_OUTPUT_FIELDS] = {GS_RIG_OUTPUT_LIST(GS_OUTPUT_INFO_)};
-const gs_field_info gs_rig_state_info[GS_RIG_STATE_FIELDS] = {
-    GS_BLOCK_STATE_LIST(GS_BLOCK_STATE_INFO_) GS_RIG_STATE_LIST(GS_RIG_STATE_INFO_)};
+const gs_field_info gs_rig_state_info[GS_RIG_STATE_FIELDS] = {GS_BLOCK_STATE_LIST(GS_BLOCK_STATE_INFO_)
+                                                                  GS_RIG_STATE_LIST(GS_RIG_STATE_INFO_)};

@@ -10,9 +10,9 @@
 
 /* The contact's state inside a step: kept in locals over the sub-steps. */
 typedef struct {
-    gs_real x;   /* backlash position, m */
-    gs_real f;   /* the last sub-step's contact force, N */
-    int locked;  /* the static-contact lock */
+    gs_real x;  /* backlash position, m */
+    gs_real f;  /* the last sub-step's contact force, N */
+    int locked; /* the static-contact lock */
 } contact_state;
 
 typedef struct {
@@ -314,8 +314,7 @@ void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
     st->follower_position = x_f;
     const gs_real inv_n = r->inv_substeps;
     out->base_port_torque = (m->base_radius * sum_f + m->mu_base * sum_w_b) * inv_n;
-    out->base_torque = speed_driven ? out->base_port_torque + r->base_inertia * st->base_acceleration
-                                       : in->base_torque;
+    out->base_torque = speed_driven ? out->base_port_torque + r->base_inertia * st->base_acceleration : in->base_torque;
     if (r->ripple && speed_driven) {
         out->base_torque += sum_ripple * inv_n;
     }

@@ -47,42 +47,42 @@ typedef struct {
     gs_base_drive base_drive;
     gs_temperature_source temperature_source;
     int substeps;
-    int substeps_capped;           /* 1: the automatic count stopped at GS_AUTO_SUBSTEPS_MAX */
+    int substeps_capped; /* 1: the automatic count stopped at GS_AUTO_SUBSTEPS_MAX */
     gs_real dt;
     gs_real base_inertia;
     gs_real initial_base_speed;
     gs_real driven_inertia;
     gs_real load_coulomb;
     gs_real inv_load_speed_threshold;
-    int friction_regularised;      /* a free driven side's friction is F(v)*tanh(4 v/v_th), a damper */
-    int speed_ramp;                /* speed-driven rigid rig: torques at the step's mean speed */
+    int friction_regularised; /* a free driven side's friction is F(v)*tanh(4 v/v_th), a damper */
+    int speed_ramp;           /* speed-driven rigid rig: torques at the step's mean speed */
     gs_real load_offset;
     gs_real inv_thermal_resistance;
-    gs_real accel_gain;            /* dt/(tau + dt) */
-    gs_real inv_dt;                /* 1/dt */
+    gs_real accel_gain; /* dt/(tau + dt) */
+    gs_real inv_dt;     /* 1/dt */
     /* the geared solve's masses (rigid mesh with a free base gear: a torque-driven
      * base over dt, or the compliant shaft's base gear over its sub-step h),
      * viscous terms implicit: the base with mu_B (+ g/2 of the shaft's midpoint
      * rule, or g of its end-speed rule), the driven side a^2*(J_F + h*mu_F) */
     geared_base_ geared_base;
     geared_base_ geared_base_end;
-    gs_real geared_follower_mass;  /* a^2*(J_F + h*mu_F) */
-    gs_real geared_follower_visc;  /* a^2*mu_F */
+    gs_real geared_follower_mass; /* a^2*(J_F + h*mu_F) */
+    gs_real geared_follower_visc; /* a^2*mu_F */
     /* A loss law that does not depend on the temperature or the load (none,
      * constant and load-dependent efficiency) is prepared once, at init. */
     int loss_static;
     gs_loss_ctx_ loss_ctx;
     gs_mesh_friction_ loss_law;
-    gs_real substep;               /* h = dt/substeps, s */
-    gs_real inv_substeps;          /* 1/substeps */
-    gs_real inv_driven_inertia_sub;/* 1/(J_F + h*mu_F): the implicit viscous term */
-    gs_real inv_base_inertia_sub;  /* 1/(J_B + h*mu_B) (torque-driven base) */
-    gs_real follower_lever;        /* s*r_F (m; the rack: s_R): T_F0 = -s*r_F*f */
-    gs_real follower_kick;         /* h*s*r_F/(J_F + h*mu_F): the follower's speed per contact force */
-    gs_real base_kick;             /* h*r_B/(J_B + h*mu_B): the base's (0 speed-driven) */
-    gs_real contact_h_omega_n;     /* h*omega_n of the contact at the chosen sub-step */
-    gs_contact_step_ contact;      /* backward-Euler contact constants for h */
-    gs_contact_step_ contact_stuck;/* the same with the driven side held by its friction
+    gs_real substep;                /* h = dt/substeps, s */
+    gs_real inv_substeps;           /* 1/substeps */
+    gs_real inv_driven_inertia_sub; /* 1/(J_F + h*mu_F): the implicit viscous term */
+    gs_real inv_base_inertia_sub;   /* 1/(J_B + h*mu_B) (torque-driven base) */
+    gs_real follower_lever;         /* s*r_F (m; the rack: s_R): T_F0 = -s*r_F*f */
+    gs_real follower_kick;          /* h*s*r_F/(J_F + h*mu_F): the follower's speed per contact force */
+    gs_real base_kick;              /* h*r_B/(J_B + h*mu_B): the base's (0 speed-driven) */
+    gs_real contact_h_omega_n;      /* h*omega_n of the contact at the chosen sub-step */
+    gs_contact_step_ contact;       /* backward-Euler contact constants for h */
+    gs_contact_step_ contact_stuck; /* the same with the driven side held by its friction
                                       (torque-driven base: the base inertia alone) */
     /* Stribeck friction: F(v) = F_C + excess*exp(-v^2/v_S^2) */
     int stribeck;
@@ -91,18 +91,18 @@ typedef struct {
     /* compliance: spring k and damper c from the drive to the base gear */
     int compliant;
     int compliance_substeps;
-    gs_real stiffness;             /* k, N*m/rad */
-    gs_real shaft_damping;         /* c, N*m*s/rad */
-    gs_real compliance_h;          /* sub-step h = dt/compliance_substeps, s */
+    gs_real stiffness;     /* k, N*m/rad */
+    gs_real shaft_damping; /* c, N*m*s/rad */
+    gs_real compliance_h;  /* sub-step h = dt/compliance_substeps, s */
     gs_real inv_compliance_substeps;
-    gs_real inv_compliance_h;      /* 1/h */
-    gs_real compliance_gain;       /* k*h/2 + c: d(shaft torque)/d(relative speed), midpoint rule */
+    gs_real inv_compliance_h; /* 1/h */
+    gs_real compliance_gain;  /* k*h/2 + c: d(shaft torque)/d(relative speed), midpoint rule */
     gs_real compliance_h_omega_n;
     /* torque ripple: A*cos(i*theta + phi) = a_i*cos(i*theta) - b_i*sin(i*theta) */
     int ripple;
     int mesh_teeth;
-    gs_real ripple_rev_cos[GS_RIPPLE_HARMONICS];  /* a_i = A_i*cos(phi_i), N*m */
-    gs_real ripple_rev_sin[GS_RIPPLE_HARMONICS];  /* b_i = A_i*sin(phi_i), N*m */
+    gs_real ripple_rev_cos[GS_RIPPLE_HARMONICS]; /* a_i = A_i*cos(phi_i), N*m */
+    gs_real ripple_rev_sin[GS_RIPPLE_HARMONICS]; /* b_i = A_i*sin(phi_i), N*m */
     gs_real ripple_mesh_cos[GS_RIPPLE_HARMONICS];
     gs_real ripple_mesh_sin[GS_RIPPLE_HARMONICS];
 } rig_consts_;
@@ -132,8 +132,7 @@ gs_real gs_rig_creep_level(const rig_consts_ *r, gs_real w_f);
  * |tanh(4 T_F w_F/p_th)| (efficiency laws, power threshold; T_F the last net
  * follower torque). Zero at rest, so the mesh creeps like the load's
  * friction; a weaker set-valued law is still passive. */
-gs_mesh_friction_ gs_rig_regularised_law(const rig_consts_ *r, const gs_mesh_friction_ *law, gs_real t_f,
-                                         gs_real w_f);
+gs_mesh_friction_ gs_rig_regularised_law(const rig_consts_ *r, const gs_mesh_friction_ *law, gs_real t_f, gs_real w_f);
 
 /* The ripple torque (physics.md 11.5) the base shaft must add at base angle
  * theta: per-revolution harmonics of theta, per-tooth harmonics of Z*theta. */
@@ -152,8 +151,8 @@ void gs_rig_cos_sin(gs_real angle, gs_real *c, gs_real *s);
 
 /* Rigid mesh, speed-driven base (rig_rigid.c); w_prev is the last speed
  * sample. The caller advances the angles. */
-void gs_rig_rigid_speed_driven(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx,
-                               const gs_rig_input *in, gs_real w_prev, gs_rig_output *out);
+void gs_rig_rigid_speed_driven(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
+                               gs_real w_prev, gs_rig_output *out);
 
 /* Rigid mesh, torque-driven base (rig_rigid.c): one geared solve over dt.
  * The caller advances the angles. */

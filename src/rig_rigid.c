@@ -10,12 +10,11 @@
  * offset and Coulomb (and Stribeck) friction smoothed on the imposed speed. */
 static gs_real driven_external(const rig_consts_ *r, gs_real load, gs_real w_f)
 {
-    return load + r->load_offset
-           - friction_level(r, w_f) * gs_tanh(GS_R(4.0) * w_f * r->inv_load_speed_threshold);
+    return load + r->load_offset - friction_level(r, w_f) * gs_tanh(GS_R(4.0) * w_f * r->inv_load_speed_threshold);
 }
 
-void gs_rig_rigid_speed_driven(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx,
-                               const gs_rig_input *in, gs_real w_prev, gs_rig_output *out)
+void gs_rig_rigid_speed_driven(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_rig_input *in,
+                               gs_real w_prev, gs_rig_output *out)
 {
     const gs_mesh_ *m = &r->mesh;
     /* the step's mean speed under the samples' linear ramp, or this sample */

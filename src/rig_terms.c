@@ -24,16 +24,15 @@ gs_real gs_rig_creep_level(const rig_consts_ *r, gs_real w_f)
     return friction_level(r, w_f) * gs_abs(gs_tanh(GS_R(4.0) * w_f * r->inv_load_speed_threshold));
 }
 
-gs_mesh_friction_ gs_rig_regularised_law(const rig_consts_ *r, const gs_mesh_friction_ *law, gs_real t_f,
-                                         gs_real w_f)
+gs_mesh_friction_ gs_rig_regularised_law(const rig_consts_ *r, const gs_mesh_friction_ *law, gs_real t_f, gs_real w_f)
 {
     const gs_mesh_ *m = &r->mesh;
     gs_mesh_friction_ out = *law;
     if (!law->lossy) {
         return out;
     }
-    const int on_speed = m->friction == GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY
-                         || m->friction == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY;
+    const int on_speed = m->friction == GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY ||
+                         m->friction == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY;
     const gs_real x = on_speed ? w_f * m->inv_speed_threshold : t_f * w_f * m->inv_power_threshold;
     const gs_real strength = gs_abs(gs_tanh(GS_R(4.0) * x));
     out.c0 *= strength;

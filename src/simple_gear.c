@@ -89,8 +89,8 @@ static gs_status check_friction(const gs_simple_gear_params *p, gs_error *err)
         if (!(p->efficiency_nominal > GS_R(0.0) && p->efficiency_nominal < GS_R(1.0))) {
             return gs_fail(err, GS_E_NOMINAL_EFFICIENCY, "efficiency_nominal");
         }
-        const gs_real k = GS_R(1.0) / p->efficiency_nominal - GS_R(1.0)
-                          - p->teeth_ratio * p->idle_torque_Nm / p->nominal_output_torque_Nm;
+        const gs_real k = GS_R(1.0) / p->efficiency_nominal - GS_R(1.0) -
+                          p->teeth_ratio * p->idle_torque_Nm / p->nominal_output_torque_Nm;
         if (k < GS_R(0.0)) {
             return gs_fail(err, GS_E_IDLE_TORQUE_TOO_LARGE, "idle_torque");
         }
@@ -98,12 +98,12 @@ static gs_status check_friction(const gs_simple_gear_params *p, gs_error *err)
         break;
     }
     case GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY:
-        s = gs_check_temperature_efficiency(err, p->temperature_vector_K, p->efficiency_vector,
-                                            p->temperature_count, p->power_threshold_W);
+        s = gs_check_temperature_efficiency(err, p->temperature_vector_K, p->efficiency_vector, p->temperature_count,
+                                            p->power_threshold_W);
         break;
     case GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY:
-        if ((s = gs_check_breakpoints(err, p->temperature_vector_K, p->temperature_count, 0,
-                                      "temperature_vector")) != GS_OK ||
+        if ((s = gs_check_breakpoints(err, p->temperature_vector_K, p->temperature_count, 0, "temperature_vector")) !=
+                GS_OK ||
             (s = gs_check_breakpoints(err, p->load_vector_Nm, p->load_count, 1, "load_vector")) != GS_OK) {
             return s;
         }
@@ -133,9 +133,14 @@ gs_status gs_simple_gear_mesh(gs_mesh_ *mesh, const gs_simple_gear_params *p, gs
     }
     gs_real direction;
     switch (p->output_shaft_rotates) {
-    case GS_ROTATES_SAME: direction = GS_R(1.0); break;
-    case GS_ROTATES_OPPOSITE: direction = GS_R(-1.0); break;
-    default: return gs_fail(err, GS_E_OPTION, "output_shaft_rotates");
+    case GS_ROTATES_SAME:
+        direction = GS_R(1.0);
+        break;
+    case GS_ROTATES_OPPOSITE:
+        direction = GS_R(-1.0);
+        break;
+    default:
+        return gs_fail(err, GS_E_OPTION, "output_shaft_rotates");
     }
     switch (p->loss_smoothing) {
     case GS_SMOOTHING_PASSIVE:
@@ -166,16 +171,15 @@ gs_status gs_simple_gear_mesh(gs_mesh_ *mesh, const gs_simple_gear_params *p, gs
     m.base_load_scale = GS_R(1.0) / g;
     if (p->friction_model == GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY) {
         m.coulomb_idle = g * p->idle_torque_Nm;
-        m.load_slope = GS_R(1.0) / p->efficiency_nominal - GS_R(1.0)
-                       - g * p->idle_torque_Nm / p->nominal_output_torque_Nm;
+        m.load_slope =
+            GS_R(1.0) / p->efficiency_nominal - GS_R(1.0) - g * p->idle_torque_Nm / p->nominal_output_torque_Nm;
     }
     if (p->friction_model == GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY ||
         p->friction_model == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY) {
         m.inv_speed_threshold = GS_R(1.0) / p->speed_threshold_rad_s;
     }
     if (p->friction_model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY) {
-        gs_mesh_set_temperature_table(&m, p->temperature_vector_K, p->efficiency_vector,
-                                      p->temperature_count);
+        gs_mesh_set_temperature_table(&m, p->temperature_vector_K, p->efficiency_vector, p->temperature_count);
     }
     if (p->friction_model == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY) {
         m.table.eta_of_T_load.nx = p->temperature_count;
@@ -193,12 +197,11 @@ gs_status gs_simple_gear_mesh(gs_mesh_ *mesh, const gs_simple_gear_params *p, gs
     if ((s = gs_mesh_set_thermal(&m, p->thermal_mass_J_K, p->initial_temperature_K, err)) != GS_OK) {
         return s;
     }
-    if (p->backlash.enabled &&
-        (s = gs_check_positive(err, p->backlash.base_radius_m, "base_radius")) != GS_OK) {
+    if (p->backlash.enabled && (s = gs_check_positive(err, p->backlash.base_radius_m, "base_radius")) != GS_OK) {
         return s;
     }
-    if ((s = gs_mesh_set_backlash(&m, &p->backlash, p->backlash.base_radius_m,
-                                  g * p->backlash.base_radius_m, err)) != GS_OK) {
+    if ((s = gs_mesh_set_backlash(&m, &p->backlash, p->backlash.base_radius_m, g * p->backlash.base_radius_m, err)) !=
+        GS_OK) {
         return s;
     }
     *mesh = m;
@@ -214,8 +217,8 @@ static const gs_mesh_ *gear_mesh(const gs_simple_gear_consts *consts)
     return (const gs_mesh_ *)(const void *)consts;
 }
 
-gs_status gs_simple_gear_init(gs_simple_gear_consts *consts, gs_block_state *state,
-                              const gs_simple_gear_params *params, gs_error *err)
+gs_status gs_simple_gear_init(gs_simple_gear_consts *consts, gs_block_state *state, const gs_simple_gear_params *params,
+                              gs_error *err)
 {
     if (consts == NULL || state == NULL) {
         return gs_fail(err, GS_E_NULL, consts == NULL ? "consts" : "state");
@@ -237,7 +240,7 @@ void gs_simple_gear_step(const gs_simple_gear_consts *consts, gs_block_state *st
                          const gs_gear_ports_in *in, gs_gear_ports_out *out)
 {
     const gs_mesh_in_ mi = {in->base_speed_rad_s, in->follower_speed_rad_s, in->follower_torque_Nm,
-                            in->heat_flow_W, in->temperature_K, in->use_temperature_input};
+                            in->heat_flow_W,      in->temperature_K,        in->use_temperature_input};
     gs_mesh_out_ mo;
     gs_mesh_block_step(gear_mesh(consts), state, dt_s, &mi, &mo);
     out->base_torque_Nm = mo.base_torque;

@@ -59,8 +59,7 @@ gs_status gs_check_efficiency(gs_error *err, gs_real value, const char *paramete
     return gs_is_finite(GS_R(1.0) / value) ? GS_OK : gs_fail(err, GS_E_MAGNITUDE, parameter);
 }
 
-gs_status gs_check_breakpoints(gs_error *err, const gs_real *x, int n, int nonnegative,
-                               const char *parameter)
+gs_status gs_check_breakpoints(gs_error *err, const gs_real *x, int n, int nonnegative, const char *parameter)
 {
     if (n < 2 || n > GS_TABLE_MAX) {
         return gs_fail(err, GS_E_TABLE_LENGTH, parameter);
@@ -79,8 +78,8 @@ gs_status gs_check_breakpoints(gs_error *err, const gs_real *x, int n, int nonne
     return GS_OK;
 }
 
-gs_status gs_check_temperature_efficiency(gs_error *err, const gs_real *temperature,
-                                          const gs_real *eta, int n, gs_real power_threshold)
+gs_status gs_check_temperature_efficiency(gs_error *err, const gs_real *temperature, const gs_real *eta, int n,
+                                          gs_real power_threshold)
 {
     gs_status s;
     if ((s = gs_check_breakpoints(err, temperature, n, 0, "temperature_vector")) != GS_OK ||
@@ -90,8 +89,7 @@ gs_status gs_check_temperature_efficiency(gs_error *err, const gs_real *temperat
     return gs_check_invertible(err, power_threshold, "power_threshold");
 }
 
-gs_status gs_check_efficiencies(gs_error *err, const gs_real *eta, int n, int expected_n,
-                                const char *parameter)
+gs_status gs_check_efficiencies(gs_error *err, const gs_real *eta, int n, int expected_n, const char *parameter)
 {
     if (n != expected_n) {
         return gs_fail(err, GS_E_TABLE_SIZE_MISMATCH, parameter);

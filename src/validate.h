@@ -15,14 +15,12 @@ gs_status gs_check_nonnegative(gs_error *err, gs_real value, const char *paramet
 gs_status gs_check_efficiency(gs_error *err, gs_real value, const char *parameter);
 /* Breakpoints: 2 <= n <= GS_TABLE_MAX, finite, strictly increasing, and
  * >= 0 when nonnegative is set. */
-gs_status gs_check_breakpoints(gs_error *err, const gs_real *x, int n, int nonnegative,
-                               const char *parameter);
+gs_status gs_check_breakpoints(gs_error *err, const gs_real *x, int n, int nonnegative, const char *parameter);
 /* The temperature-dependent efficiency law: temperature_vector breakpoints,
  * efficiency_vector data, power_threshold (physics.md 2.4, 6). */
-gs_status gs_check_temperature_efficiency(gs_error *err, const gs_real *temperature,
-                                          const gs_real *eta, int n, gs_real power_threshold);
+gs_status gs_check_temperature_efficiency(gs_error *err, const gs_real *temperature, const gs_real *eta, int n,
+                                          gs_real power_threshold);
 /* Efficiency data: count must equal expected_n, each entry in (0, 1]. */
-gs_status gs_check_efficiencies(gs_error *err, const gs_real *eta, int n, int expected_n,
-                                const char *parameter);
+gs_status gs_check_efficiencies(gs_error *err, const gs_real *eta, int n, int expected_n, const char *parameter);
 
 #endif /* GS_VALIDATE_H */

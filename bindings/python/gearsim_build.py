@@ -196,7 +196,11 @@ def hil_library(absolute: bool = False) -> tuple[str, dict]:
     sources = sorted(HIL_SRC_DIR.glob("*.c"))
     if not sources:
         raise RuntimeError(f"gearsim: no C sources found in {HIL_SRC_DIR}")
-    deps = [HIL_HEADER, *sorted(HIL_SRC_DIR.glob("*.h")), *sorted((INCLUDE_DIR / "gearsim").glob("*.h"))]
+    deps = [
+        HIL_HEADER,
+        *sorted(HIL_SRC_DIR.glob("*.h")),
+        *sorted((INCLUDE_DIR / "gearsim").glob("*.h")),
+    ]
     deps.append(WARNINGS_FILE)
     deps += [Path(__file__).resolve(), ROOT / "setup.py"]
     return (

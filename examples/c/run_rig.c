@@ -22,8 +22,8 @@ static int run_gear(void)
         return 1;
     }
     printf("Simple Gear rig (ratio 3, opposite, efficiency 0.95), dt = 1 ms\n");
-    printf("%8s %12s %12s %14s %14s %12s\n", "t [s]", "w_B [rad/s]", "load [N*m]", "tau_B [N*m]",
-           "w_F [rad/s]", "P_loss [W]");
+    printf("%8s %12s %12s %14s %14s %12s\n", "t [s]", "w_B [rad/s]", "load [N*m]", "tau_B [N*m]", "w_F [rad/s]",
+           "P_loss [W]");
     for (int i = 0; i <= 3000; ++i) {
         const gs_real t = GS_R(1e-3) * (gs_real)i;
         gs_rig_input in = {0};
@@ -33,9 +33,8 @@ static int run_gear(void)
         gs_rig_output out;
         gs_rig_step(&consts, &state, &in, &out);
         if (i % 250 == 0) {
-            printf("%8.3f %12.3f %12.3f %14.5f %14.5f %12.4f\n", (double)t, (double)in.base_speed,
-                   (double)in.load, (double)out.base_torque, (double)out.follower_speed,
-                   (double)out.loss_power);
+            printf("%8.3f %12.3f %12.3f %14.5f %14.5f %12.4f\n", (double)t, (double)in.base_speed, (double)in.load,
+                   (double)out.base_torque, (double)out.follower_speed, (double)out.loss_power);
         }
     }
     return 0;
@@ -65,8 +64,8 @@ static int run_rack(void)
         gs_rig_output out;
         gs_rig_step(&consts, &state, &in, &out);
         if (i % 250 == 0) {
-            printf("%8.3f %12.3f %14.5f %14.5f %14.5f\n", (double)t, (double)in.base_speed,
-                   (double)out.base_torque, (double)out.follower_speed, (double)out.follower_position);
+            printf("%8.3f %12.3f %14.5f %14.5f %14.5f\n", (double)t, (double)in.base_speed, (double)out.base_torque,
+                   (double)out.follower_speed, (double)out.follower_position);
         }
     }
     return 0;

@@ -10,6 +10,7 @@ differ in structure or when any value differs by more than --max-ulp ULP.
 
 usage: compare_outputs.py HOST.txt TARGET.txt [--max-ulp N]
 """
+
 import argparse
 import struct
 import sys
@@ -43,7 +44,7 @@ def main():
         print(f"FAIL: {len(host)} lines on the host, {len(target)} on the target")
         return 1
     scenario, stats, order, bad = None, {}, [], 0
-    for hl, tl in zip(host, target):
+    for hl, tl in zip(host, target, strict=True):  # equal line counts: checked above
         hf, tf = hl.split(), tl.split()
         if hf and hf[0] == "scenario":
             scenario = hf[1]
@@ -60,7 +61,7 @@ def main():
             bad += 1
             continue
         st = stats[scenario]
-        for i, (a, b) in enumerate(zip(hf[1:], tf[1:])):
+        for i, (a, b) in enumerate(zip(hf[1:], tf[1:], strict=True)):  # lengths checked above
             width = 4 * len(a)
             st["values"] += 1
             v = as_float(int(a, 16), width)
@@ -81,13 +82,18 @@ def main():
     same = sum(s["same"] for s in stats.values())
     for name in order:
         s = stats[name]
-        note = "bit-identical" if s["same"] == s["values"] else (
-            f"max {s['ulp']} ULP ({s['where']}), max relative {s['rel']:.3g}")
+        note = (
+            "bit-identical"
+            if s["same"] == s["values"]
+            else (f"max {s['ulp']} ULP ({s['where']}), max relative {s['rel']:.3g}")
+        )
         print(f"  {name:24s} {s['same']:6d}/{s['values']:<6d} values identical  {note}")
         if s["ulp"] > args.max_ulp:
             bad += 1
-    print(f"compared {total} values in {len(order)} scenarios: {same} bit-identical, "
-          f"{total - same} different (allowed: up to {args.max_ulp} ULP)")
+    print(
+        f"compared {total} values in {len(order)} scenarios: {same} bit-identical, "
+        f"{total - same} different (allowed: up to {args.max_ulp} ULP)"
+    )
     return 1 if bad else 0
 
 

@@ -11,6 +11,7 @@ indirect call, or a worst case above --budget bytes.
 
 usage: stack_report.py --objdir DIR --headers DIR --elf PROG.elf --objdump TOOL [--budget N]
 """
+
 import argparse
 import glob
 import os
@@ -20,7 +21,7 @@ import sys
 
 NODE = re.compile(r'^node: \{ title: "([^"]+)" label: "([^"]*)"(.*)\}$')
 EDGE = re.compile(r'^edge: \{ sourcename: "([^"]+)" targetname: "([^"]+)"')
-FRAME = re.compile(r'\\n(\d+) bytes \(([a-z,]+)\)')
+FRAME = re.compile(r"\\n(\d+) bytes \(([a-z,]+)\)")
 
 
 def parse_graphs(objdir):
@@ -49,8 +50,9 @@ def parse_graphs(objdir):
 
 def leaf_frame(objdump, elf, name):
     """Stack bytes of a leaf routine in the linked program: push/stmdb + vpush + sub sp."""
-    out = subprocess.run([objdump, "-d", "--no-show-raw-insn", elf], check=True,
-                         capture_output=True, text=True).stdout
+    out = subprocess.run(
+        [objdump, "-d", "--no-show-raw-insn", elf], check=True, capture_output=True, text=True
+    ).stdout
     m = re.search(rf"^[0-9a-f]+ <{re.escape(name)}>:\n(.*?)(?:\n\n|\Z)", out, re.S | re.M)
     if not m:
         return None
@@ -145,9 +147,11 @@ def main():
         print(f"{fn:34s} {frames[fn]:7d} B {total:8d} B  {names}")
         if total > deepest[1]:
             deepest = (fn, total)
-    print(f"deepest public entry: {deepest[0]} = {deepest[1]} bytes "
-          f"(frames from -fstack-usage, call graph from -fcallgraph-info; "
-          f"memcpy/memset frames from the linked newlib)")
+    print(
+        f"deepest public entry: {deepest[0]} = {deepest[1]} bytes "
+        f"(frames from -fstack-usage, call graph from -fcallgraph-info; "
+        f"memcpy/memset frames from the linked newlib)"
+    )
     if args.budget and deepest[1] > args.budget:
         problems.append(f"worst case {deepest[1]} B exceeds the budget of {args.budget} B")
     for p in problems:

@@ -39,28 +39,23 @@
 #endif
 #define THIS_RIG ((gs_fmu_rig)GS_FMU_RIG_KIND)
 
-enum {
-    MODE_INSTANTIATED = 1 << 0,
-    MODE_INITIALIZATION = 1 << 1,
-    MODE_STEP = 1 << 2,
-    MODE_TERMINATED = 1 << 3
-};
+enum { MODE_INSTANTIATED = 1 << 0, MODE_INITIALIZATION = 1 << 1, MODE_STEP = 1 << 2, MODE_TERMINATED = 1 << 3 };
 #define MODE_ANY (MODE_INSTANTIATED | MODE_INITIALIZATION | MODE_STEP | MODE_TERMINATED)
 
 /* Relative tolerance on h/dt and on the communication time. */
 #define STEP_RATIO_TOLERANCE 1e-6
-#define MAX_STEPS_PER_CALL 1e12
+#define MAX_STEPS_PER_CALL   1e12
 
 /* Everything an FMU state holds: plain data, no pointers. */
 typedef struct {
     int mode;
-    int rig_ready;              /* rig initialised from params */
+    int rig_ready; /* rig initialised from params */
     gs_fmu_params params;
     gs_rig_input input;
     gs_rig_output output;
-    gs_rig_state state;         /* the rig's state: what a step updates */
+    gs_rig_state state; /* the rig's state: what a step updates */
     double start_time;
-    long long steps;            /* internal steps since start_time */
+    long long steps; /* internal steps since start_time */
 } fmu_data;
 
 typedef struct {
@@ -78,7 +73,7 @@ typedef struct {
     fmi2ComponentEnvironment env;
     char *name;
     int logging_on;
-    int log_info;               /* category "logInfo" enabled */
+    int log_info; /* category "logInfo" enabled */
     char guid[GS_FMU_GUID_SIZE];
 } fmu;
 
@@ -118,8 +113,7 @@ static void log_status(const fmu *c, fmi2Status status, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    emit(c->logger, c->env, c->name, status, status == fmi2Warning ? "logStatusWarning" : "logStatusError", fmt,
-         ap);
+    emit(c->logger, c->env, c->name, status, status == fmi2Warning ? "logStatusWarning" : "logStatusError", fmt, ap);
     va_end(ap);
 }
 
@@ -135,8 +129,7 @@ static void log_info(const fmu *c, const char *fmt, ...)
     va_end(ap);
 }
 
-static void log_early(const fmi2CallbackFunctions *functions, const char *name, const char *fmt, ...)
-    GS_PRINTF(3, 4);
+static void log_early(const fmi2CallbackFunctions *functions, const char *name, const char *fmt, ...) GS_PRINTF(3, 4);
 static void log_early(const fmi2CallbackFunctions *functions, const char *name, const char *fmt, ...)
 {
     if (functions == NULL) {
@@ -151,11 +144,16 @@ static void log_early(const fmi2CallbackFunctions *functions, const char *name, 
 static const char *mode_name(int mode)
 {
     switch (mode) {
-    case MODE_INSTANTIATED: return "instantiated";
-    case MODE_INITIALIZATION: return "initialization mode";
-    case MODE_STEP: return "step mode";
-    case MODE_TERMINATED: return "terminated";
-    default: return "unknown";
+    case MODE_INSTANTIATED:
+        return "instantiated";
+    case MODE_INITIALIZATION:
+        return "initialization mode";
+    case MODE_STEP:
+        return "step mode";
+    case MODE_TERMINATED:
+        return "terminated";
+    default:
+        return "unknown";
     }
 }
 
@@ -188,9 +186,12 @@ static void instantiated_data(fmu_data *d)
 static void *region_of(fmu_data *d, gs_fmu_region region)
 {
     switch (region) {
-    case GS_FMU_AT_PARAMS: return &d->params;
-    case GS_FMU_AT_INPUT: return &d->input;
-    case GS_FMU_AT_OUTPUT: return &d->output;
+    case GS_FMU_AT_PARAMS:
+        return &d->params;
+    case GS_FMU_AT_INPUT:
+        return &d->input;
+    case GS_FMU_AT_OUTPUT:
+        return &d->output;
     }
     return NULL;
 }
@@ -223,8 +224,8 @@ static void report_parameter_error(const fmu *c, const fmu_data *d, const char *
     char value[96];
     const char *parameter = err->parameter != NULL ? err->parameter : "";
     describe_value(c, d, parameter, value, sizeof value);
-    log_status(c, fmi2Error, "%s: parameter \"%s\" rejected%s: %s (gearsim status %d)", function, parameter,
-               value, err->message != NULL ? err->message : gs_status_str(err->status), (int)err->status);
+    log_status(c, fmi2Error, "%s: parameter \"%s\" rejected%s: %s (gearsim status %d)", function, parameter, value,
+               err->message != NULL ? err->message : gs_status_str(err->status), (int)err->status);
 }
 
 /* Validates with->params through the rig init and derives their constants
@@ -259,8 +260,7 @@ static int apply_consts(fmu *c, const fmu_data *with, const char *function)
  * only when those parameters changed. */
 static int sync_consts(fmu *c, const char *function)
 {
-    if (!c->d.rig_ready ||
-        (c->consts_ready && memcmp(&c->consts_params, &c->d.params, sizeof c->consts_params) == 0)) {
+    if (!c->d.rig_ready || (c->consts_ready && memcmp(&c->consts_params, &c->d.params, sizeof c->consts_params) == 0)) {
         return 1;
     }
     return apply_consts(c, &c->d, function);
@@ -385,8 +385,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     memcpy(c->guid, guid, sizeof guid);
     c->nvars = gs_fmu_variables(THIS_RIG, c->vars, GS_FMU_MAX_VARS);
     instantiated_data(&c->d);
-    log_info(c, "fmi2Instantiate: %s, gearsim %s, %zu variables", gs_fmu_model_identifier(THIS_RIG),
-             GS_VERSION_STRING, c->nvars);
+    log_info(c, "fmi2Instantiate: %s, gearsim %s, %zu variables", gs_fmu_model_identifier(THIS_RIG), GS_VERSION_STRING,
+             c->nvars);
     return c;
 }
 
@@ -401,8 +401,8 @@ void fmi2FreeInstance(fmi2Component comp)
     release(c);
 }
 
-fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean toleranceDefined, fmi2Real tolerance,
-                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
+fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean toleranceDefined, fmi2Real tolerance, fmi2Real startTime,
+                               fmi2Boolean stopTimeDefined, fmi2Real stopTime)
 {
     fmu *c = (fmu *)comp;
     (void)toleranceDefined;
@@ -487,15 +487,15 @@ static int check_vr(const fmu *c, const char *function, fmi2ValueReference vr, g
     const gs_fmu_type t = c->vars[vr].type;
     const int ok = t == type || (type == GS_FMU_T_INTEGER && t == GS_FMU_T_ENUMERATION);
     if (!ok) {
-        log_status(c, fmi2Error, "%s: variable \"%s\" (value reference %u) is of type %s", function,
-                   c->vars[vr].name, (unsigned)vr, gs_fmu_type_name(t));
+        log_status(c, fmi2Error, "%s: variable \"%s\" (value reference %u) is of type %s", function, c->vars[vr].name,
+                   (unsigned)vr, gs_fmu_type_name(t));
         return 0;
     }
     return 1;
 }
 
-static fmi2Status get_values(fmu *c, const char *function, gs_fmu_type type, const fmi2ValueReference vr[],
-                             size_t nvr, fmi2Real *reals, fmi2Integer *ints)
+static fmi2Status get_values(fmu *c, const char *function, gs_fmu_type type, const fmi2ValueReference vr[], size_t nvr,
+                             fmi2Real *reals, fmi2Integer *ints)
 {
     if (c == NULL || !allowed(c, function, MODE_ANY)) {
         return fmi2Error;
@@ -522,8 +522,8 @@ static fmi2Status get_values(fmu *c, const char *function, gs_fmu_type type, con
 }
 
 /* Stages every value of the call; commits all of them, or none on error. */
-static fmi2Status set_values(fmu *c, const char *function, gs_fmu_type type, const fmi2ValueReference vr[],
-                             size_t nvr, const fmi2Real *reals, const fmi2Integer *ints)
+static fmi2Status set_values(fmu *c, const char *function, gs_fmu_type type, const fmi2ValueReference vr[], size_t nvr,
+                             const fmi2Real *reals, const fmi2Integer *ints)
 {
     if (c == NULL || !allowed(c, function, MODE_INSTANTIATED | MODE_INITIALIZATION | MODE_STEP)) {
         return fmi2Error;
@@ -619,14 +619,12 @@ fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t
     return set_values((fmu *)comp, "fmi2SetReal", GS_FMU_T_REAL, vr, nvr, value, NULL);
 }
 
-fmi2Status fmi2SetInteger(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr,
-                          const fmi2Integer value[])
+fmi2Status fmi2SetInteger(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[])
 {
     return set_values((fmu *)comp, "fmi2SetInteger", GS_FMU_T_INTEGER, vr, nvr, NULL, value);
 }
 
-fmi2Status fmi2SetBoolean(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr,
-                          const fmi2Boolean value[])
+fmi2Status fmi2SetBoolean(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[])
 {
     return set_values((fmu *)comp, "fmi2SetBoolean", GS_FMU_T_BOOLEAN, vr, nvr, NULL, value);
 }
@@ -640,10 +638,10 @@ fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[], size
 
 /* ---- FMU state */
 
-#define STATE_MAGIC "GSFMI2S"   /* 7 characters and the NUL: 8 bytes */
-#define STATE_FORMAT 2u      /* 2: the rig's state alone (gs_rig_state), no constants */
+#define STATE_MAGIC       "GSFMI2S" /* 7 characters and the NUL: 8 bytes */
+#define STATE_FORMAT      2u        /* 2: the rig's state alone (gs_rig_state), no constants */
 #define STATE_HEADER_SIZE (8 + 4 + 4 + 8 + GS_FMU_GUID_SIZE)
-#define STATE_SIZE (STATE_HEADER_SIZE + sizeof(fmu_data))
+#define STATE_SIZE        (STATE_HEADER_SIZE + sizeof(fmu_data))
 
 /* Copies d into *state, allocating the state first when *state is NULL. */
 static fmi2Status store_state(const fmu *c, const char *function, fmi2FMUstate *state, const fmu_data *d)
@@ -720,8 +718,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component comp, fmi2FMUstate state, si
     return fmi2OK;
 }
 
-fmi2Status fmi2SerializeFMUstate(fmi2Component comp, fmi2FMUstate state, fmi2Byte serializedState[],
-                                 size_t size)
+fmi2Status fmi2SerializeFMUstate(fmi2Component comp, fmi2FMUstate state, fmi2Byte serializedState[], size_t size)
 {
     fmu *c = (fmu *)comp;
     if (c == NULL) {
@@ -790,9 +787,9 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte serialized
     return store_state(c, "fmi2DeSerializeFMUstate", state, &d);
 }
 
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp, const fmi2ValueReference vUnknown_ref[],
-                                        size_t nUnknown, const fmi2ValueReference vKnown_ref[], size_t nKnown,
-                                        const fmi2Real dvKnown[], fmi2Real dvUnknown[])
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
+                                        const fmi2ValueReference vKnown_ref[], size_t nKnown, const fmi2Real dvKnown[],
+                                        fmi2Real dvUnknown[])
 {
     fmu *c = (fmu *)comp;
     (void)vUnknown_ref;
@@ -818,8 +815,9 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component comp, const fmi2ValueRefere
     (void)order;
     (void)value;
     if (c != NULL) {
-        log_status(c, fmi2Error, "fmi2SetRealInputDerivatives: inputs are held constant over a step "
-                                 "(canInterpolateInputs = false)");
+        log_status(c, fmi2Error,
+                   "fmi2SetRealInputDerivatives: inputs are held constant over a step "
+                   "(canInterpolateInputs = false)");
     }
     return fmi2Error;
 }

@@ -16,16 +16,14 @@
 
 /* Enum parameters are stored as int in the C structs (an FMU is built for a
  * host ABI, where enums are int-sized). */
-typedef char gs_fmu_enum_size_check_[(sizeof(gs_friction_model) == sizeof(int) &&
-                                      sizeof(gs_loss_smoothing) == sizeof(int) &&
-                                      sizeof(gs_hard_stop_model) == sizeof(int) &&
-                                      sizeof(gs_output_rotation) == sizeof(int) &&
-                                      sizeof(gs_rack_parameterization) == sizeof(int) &&
-                                      sizeof(gs_rack_direction) == sizeof(int) &&
-                                      sizeof(gs_base_drive) == sizeof(int) &&
-                                      sizeof(gs_temperature_source) == sizeof(int))
-                                         ? 1
-                                         : -1];
+typedef char
+    gs_fmu_enum_size_check_[(sizeof(gs_friction_model) == sizeof(int) && sizeof(gs_loss_smoothing) == sizeof(int) &&
+                             sizeof(gs_hard_stop_model) == sizeof(int) && sizeof(gs_output_rotation) == sizeof(int) &&
+                             sizeof(gs_rack_parameterization) == sizeof(int) &&
+                             sizeof(gs_rack_direction) == sizeof(int) && sizeof(gs_base_drive) == sizeof(int) &&
+                             sizeof(gs_temperature_source) == sizeof(int))
+                                ? 1
+                                : -1];
 
 /* ---- units: SI base-unit exponents (kg, m, s, K, rad) */
 
@@ -151,14 +149,18 @@ static gs_fmu_type fmi_type(gs_param_kind kind)
 {
     switch (kind) {
     case GS_PARAM_INT:
-    case GS_PARAM_COUNT: return GS_FMU_T_INTEGER;
-    case GS_PARAM_BOOL: return GS_FMU_T_BOOLEAN;
-    case GS_PARAM_OPTION: return GS_FMU_T_ENUMERATION;
+    case GS_PARAM_COUNT:
+        return GS_FMU_T_INTEGER;
+    case GS_PARAM_BOOL:
+        return GS_FMU_T_BOOLEAN;
+    case GS_PARAM_OPTION:
+        return GS_FMU_T_ENUMERATION;
     case GS_PARAM_REAL:
     case GS_PARAM_ARRAY:
     case GS_PARAM_TABLE:
     case GS_PARAM_MATRIX:
-    case GS_PARAM_GROUP: break;
+    case GS_PARAM_GROUP:
+        break;
     }
     return GS_FMU_T_REAL;
 }
@@ -242,8 +244,8 @@ void gs_fmu_defaults(gs_fmu_params *params, gs_rig_input *input)
     input->measured_temperature = GS_R(300.0);
 }
 
-gs_status gs_fmu_init_rig(gs_fmu_rig rig, const gs_fmu_params *params, gs_rig_consts *consts,
-                          gs_rig_state *state, gs_error *err)
+gs_status gs_fmu_init_rig(gs_fmu_rig rig, const gs_fmu_params *params, gs_rig_consts *consts, gs_rig_state *state,
+                          gs_error *err)
 {
     return rig == GS_FMU_RIG_GEAR ? gs_rig_init_gear(consts, state, &params->gear, &params->rig, err)
                                   : gs_rig_init_rack(consts, state, &params->rack, &params->rig, err);
@@ -284,10 +286,14 @@ void gs_fmu_write_int(const gs_fmu_var *v, void *base, int value)
 const char *gs_fmu_type_name(gs_fmu_type type)
 {
     switch (type) {
-    case GS_FMU_T_REAL: return "Real";
-    case GS_FMU_T_INTEGER: return "Integer";
-    case GS_FMU_T_BOOLEAN: return "Boolean";
-    case GS_FMU_T_ENUMERATION: return "Enumeration";
+    case GS_FMU_T_REAL:
+        return "Real";
+    case GS_FMU_T_INTEGER:
+        return "Integer";
+    case GS_FMU_T_BOOLEAN:
+        return "Boolean";
+    case GS_FMU_T_ENUMERATION:
+        return "Enumeration";
     }
     return "?";
 }
@@ -348,15 +354,14 @@ void gs_fmu_guid(gs_fmu_rig rig, char guid[GS_FMU_GUID_SIZE])
             h[k] = fnv_str(h[k], v->enum_type);
             h[k] = fnv(h[k], kind, sizeof kind);
             if (v->causality != GS_FMU_C_OUTPUT) {
-                const double start = gs_fmu_read_real(v, v->region == GS_FMU_AT_PARAMS ? (const void *)&params
-                                                                                       : (const void *)&input);
+                const double start =
+                    gs_fmu_read_real(v, v->region == GS_FMU_AT_PARAMS ? (const void *)&params : (const void *)&input);
                 h[k] = fnv(h[k], &start, sizeof start);
             }
         }
         h[k] = fnv(h[k], &k, sizeof k);
     }
     memset(guid, 0, GS_FMU_GUID_SIZE); /* all GS_FMU_GUID_SIZE bytes are compared and serialized */
-    (void)snprintf(guid, GS_FMU_GUID_SIZE, "{%08llx-%04llx-%04llx-%04llx-%012llx}",
-                   (h[0] >> 32) & 0xffffffffULL, (h[0] >> 16) & 0xffffULL, h[0] & 0xffffULL,
-                   (h[1] >> 48) & 0xffffULL, h[1] & 0xffffffffffffULL);
+    (void)snprintf(guid, GS_FMU_GUID_SIZE, "{%08llx-%04llx-%04llx-%04llx-%012llx}", (h[0] >> 32) & 0xffffffffULL,
+                   (h[0] >> 16) & 0xffffULL, h[0] & 0xffffULL, (h[1] >> 48) & 0xffffULL, h[1] & 0xffffffffffffULL);
 }

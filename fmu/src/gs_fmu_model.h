@@ -28,7 +28,7 @@
  * both an input and an output of the rig and FMI variable names are unique. */
 #define GS_FMU_INPUT_PREFIX "inputs."
 
-#define GS_FMU_MAX_VARS 256
+#define GS_FMU_MAX_VARS  256
 #define GS_FMU_NAME_SIZE 48
 #define GS_FMU_GUID_SIZE 40 /* "{8-4-4-4-12}" plus the terminating NUL */
 
@@ -61,16 +61,16 @@ typedef struct {
 } gs_fmu_params;
 
 typedef struct {
-    char name[GS_FMU_NAME_SIZE];   /* FMI name, e.g. "efficiency_matrix[2,3]" */
-    const char *base_name;         /* without the index: the name gs_error.parameter uses */
+    char name[GS_FMU_NAME_SIZE]; /* FMI name, e.g. "efficiency_matrix[2,3]" */
+    const char *base_name;       /* without the index: the name gs_error.parameter uses */
     gs_fmu_type type;
     gs_fmu_causality causality;
     gs_fmu_variability variability;
     gs_fmu_region region;
     gs_fmu_storage storage;
-    size_t offset;                 /* byte offset in gs_fmu_params / gs_rig_input / gs_rig_output */
-    const char *unit;              /* a unit of gs_fmu_units(), or NULL when dimensionless */
-    const char *enum_type;         /* GS_FMU_T_ENUMERATION: the name of its option list */
+    size_t offset;                   /* byte offset in gs_fmu_params / gs_rig_input / gs_rig_output */
+    const char *unit;                /* a unit of gs_fmu_units(), or NULL when dimensionless */
+    const char *enum_type;           /* GS_FMU_T_ENUMERATION: the name of its option list */
     const gs_param_options *options; /* GS_FMU_T_ENUMERATION: the option list (the type's items) */
     const char *description;
 } gs_fmu_var;
@@ -79,7 +79,7 @@ typedef struct {
 typedef struct {
     const char *name;
     int kg, m, s, K, rad;
-    const char *display_name;      /* NULL or one display unit */
+    const char *display_name; /* NULL or one display unit */
     double display_factor;
     double display_offset;
 } gs_fmu_unit;
@@ -95,8 +95,8 @@ void gs_fmu_defaults(gs_fmu_params *params, gs_rig_input *input);
 
 /* Validates params and initialises the rig's constants and state
  * (gs_rig_init_gear / _rack). */
-gs_status gs_fmu_init_rig(gs_fmu_rig rig, const gs_fmu_params *params, gs_rig_consts *consts,
-                          gs_rig_state *state, gs_error *err);
+gs_status gs_fmu_init_rig(gs_fmu_rig rig, const gs_fmu_params *params, gs_rig_consts *consts, gs_rig_state *state,
+                          gs_error *err);
 
 /* The FMI unit (a name of gs_fmu_units()) of a unit of the library's tables,
  * which are written as pint parses them ("N*m", "kg*m**2", "rad/s^2"); NULL

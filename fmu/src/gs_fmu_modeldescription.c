@@ -34,11 +34,21 @@ static void put_escaped(FILE *f, const char *s)
 {
     for (; s != NULL && *s != '\0'; ++s) {
         switch (*s) {
-        case '&': fputs("&amp;", f); break;
-        case '<': fputs("&lt;", f); break;
-        case '>': fputs("&gt;", f); break;
-        case '"': fputs("&quot;", f); break;
-        default: fputc(*s, f); break;
+        case '&':
+            fputs("&amp;", f);
+            break;
+        case '<':
+            fputs("&lt;", f);
+            break;
+        case '>':
+            fputs("&gt;", f);
+            break;
+        case '"':
+            fputs("&quot;", f);
+            break;
+        default:
+            fputc(*s, f);
+            break;
         }
     }
 }
@@ -76,9 +86,12 @@ static const void *start_base(const gs_fmu_var *v, const gs_fmu_params *params, 
 static const char *causality_name(gs_fmu_causality c)
 {
     switch (c) {
-    case GS_FMU_C_PARAMETER: return "parameter";
-    case GS_FMU_C_INPUT: return "input";
-    case GS_FMU_C_OUTPUT: return "output";
+    case GS_FMU_C_PARAMETER:
+        return "parameter";
+    case GS_FMU_C_INPUT:
+        return "input";
+    case GS_FMU_C_OUTPUT:
+        return "output";
     }
     return "?";
 }
@@ -86,9 +99,12 @@ static const char *causality_name(gs_fmu_causality c)
 static const char *variability_name(gs_fmu_variability v)
 {
     switch (v) {
-    case GS_FMU_V_FIXED: return "fixed";
-    case GS_FMU_V_TUNABLE: return "tunable";
-    case GS_FMU_V_CONTINUOUS: return "continuous";
+    case GS_FMU_V_FIXED:
+        return "fixed";
+    case GS_FMU_V_TUNABLE:
+        return "tunable";
+    case GS_FMU_V_CONTINUOUS:
+        return "continuous";
     }
     return "?";
 }
@@ -117,20 +133,22 @@ static int write_xml(gs_fmu_rig rig, const char *path)
     fprintf(f, "<fmiModelDescription\n  fmiVersion=\"2.0\"\n  modelName=\"%s\"\n  guid=\"%s\"\n  description=\"",
             gs_fmu_model_name(rig), guid);
     put_escaped(f, gs_fmu_model_description(rig));
-    fprintf(f, "\"\n  author=\"gearsim\"\n  version=\"%s\"\n  generationTool=\"gearsim gs_fmu_modeldescription\"\n"
-               "  variableNamingConvention=\"structured\"\n  numberOfEventIndicators=\"0\">\n",
+    fprintf(f,
+            "\"\n  author=\"gearsim\"\n  version=\"%s\"\n  generationTool=\"gearsim gs_fmu_modeldescription\"\n"
+            "  variableNamingConvention=\"structured\"\n  numberOfEventIndicators=\"0\">\n",
             GS_VERSION_STRING);
-    fprintf(f, "  <CoSimulation\n    modelIdentifier=\"%s\"\n"
-               "    needsExecutionTool=\"false\"\n"
-               "    canHandleVariableCommunicationStepSize=\"true\"\n"
-               "    canInterpolateInputs=\"false\"\n"
-               "    maxOutputDerivativeOrder=\"0\"\n"
-               "    canRunAsynchronuously=\"false\"\n"
-               "    canBeInstantiatedOnlyOncePerProcess=\"false\"\n"
-               "    canNotUseMemoryManagementFunctions=\"false\"\n"
-               "    canGetAndSetFMUstate=\"true\"\n"
-               "    canSerializeFMUstate=\"true\"\n"
-               "    providesDirectionalDerivative=\"false\"/>\n",
+    fprintf(f,
+            "  <CoSimulation\n    modelIdentifier=\"%s\"\n"
+            "    needsExecutionTool=\"false\"\n"
+            "    canHandleVariableCommunicationStepSize=\"true\"\n"
+            "    canInterpolateInputs=\"false\"\n"
+            "    maxOutputDerivativeOrder=\"0\"\n"
+            "    canRunAsynchronuously=\"false\"\n"
+            "    canBeInstantiatedOnlyOncePerProcess=\"false\"\n"
+            "    canNotUseMemoryManagementFunctions=\"false\"\n"
+            "    canGetAndSetFMUstate=\"true\"\n"
+            "    canSerializeFMUstate=\"true\"\n"
+            "    providesDirectionalDerivative=\"false\"/>\n",
             gs_fmu_model_identifier(rig));
 
     size_t nunits;
@@ -274,9 +292,15 @@ static void markdown_start(const gs_fmu_var *vars, size_t first, size_t count, c
     }
     if (count == 1 && strchr(v->name, '[') == NULL) {
         switch (v->type) {
-        case GS_FMU_T_REAL: format_real(buf, size, gs_fmu_read_real(v, base)); break;
-        case GS_FMU_T_INTEGER: (void)snprintf(buf, size, "%d", gs_fmu_read_int(v, base)); break;
-        case GS_FMU_T_BOOLEAN: (void)snprintf(buf, size, "%s", gs_fmu_read_int(v, base) ? "true" : "false"); break;
+        case GS_FMU_T_REAL:
+            format_real(buf, size, gs_fmu_read_real(v, base));
+            break;
+        case GS_FMU_T_INTEGER:
+            (void)snprintf(buf, size, "%d", gs_fmu_read_int(v, base));
+            break;
+        case GS_FMU_T_BOOLEAN:
+            (void)snprintf(buf, size, "%s", gs_fmu_read_int(v, base) ? "true" : "false");
+            break;
         case GS_FMU_T_ENUMERATION: {
             const int value = gs_fmu_read_int(v, base);
             const char *item = "?";

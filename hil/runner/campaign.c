@@ -68,7 +68,8 @@ void runner_campaign_start(runner *r)
         if (!runner_has_log_suffix(o->log)) {
             runner_die("--log %s: the runner records candump .log files", o->log);
         }
-        if ((o->out != NULL && runner_same_file(o->log, o->out)) || (o->junit != NULL && strcmp(o->log, o->junit) == 0)) {
+        if ((o->out != NULL && runner_same_file(o->log, o->out)) ||
+            (o->junit != NULL && strcmp(o->log, o->junit) == 0)) {
             runner_die("--log %s: is another output of the command", o->log);
         }
     }
@@ -76,8 +77,8 @@ void runner_campaign_start(runner *r)
         size_t length = 0;
         char *text = read_text(o->scenario, &length);
         gs_hil_error err;
-        gs_hil_status status = gs_hil_scenario_parse(&r->scenario, text, length, o->scenario, r->bridge.config.dbc,
-                                                     r->params.block, &err);
+        gs_hil_status status =
+            gs_hil_scenario_parse(&r->scenario, text, length, o->scenario, r->bridge.config.dbc, r->params.block, &err);
         free(text);
         if (status != GS_HIL_OK || gs_hil_attach_scenario(&r->bridge, &r->scenario, &err) != GS_HIL_OK) {
             runner_die("%s", err.message);

@@ -10,7 +10,7 @@
 #include <string.h>
 
 /* python-can marks error frames with these bits of the ID (can/io/canutils.py). */
-#define CANDUMP_ERR_FLAG 0x20000000u
+#define CANDUMP_ERR_FLAG     0x20000000u
 #define CANDUMP_ERR_BUSERROR 0x00000080u
 
 static int hex_digit(char c)
@@ -205,8 +205,7 @@ size_t candump_format_line_dir(const gs_hil_frame *frame, double stamp_s, const 
     return n;
 }
 
-size_t candump_format_line(const gs_hil_frame *frame, double stamp_s, const char *channel, char *out,
-                           size_t size)
+size_t candump_format_line(const gs_hil_frame *frame, double stamp_s, const char *channel, char *out, size_t size)
 {
     return candump_format_line_dir(frame, stamp_s, channel, 'T', out, size);
 }

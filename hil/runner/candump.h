@@ -24,8 +24,7 @@ int candump_parse_line(const char *line, size_t length, gs_hil_frame *frame);
 /* frame -> candump -L line stamped stamp_s, python-can's format (6 decimals,
  * upper-case hex, 3 or 8 ID digits, " T" as sent, newline). Returns its
  * length (< size), or 0 when it does not fit or the stamp is not in [0, 1e12). */
-size_t candump_format_line(const gs_hil_frame *frame, double stamp_s, const char *channel, char *out,
-                           size_t size);
+size_t candump_format_line(const gs_hil_frame *frame, double stamp_s, const char *channel, char *out, size_t size);
 
 /* The same with the direction field given: 'T' sent, 'R' received. Error
  * frames are written with CAN_ERR_FLAG|CAN_ERR_BUSERROR as their ID and

@@ -95,7 +95,7 @@ static void set_defaults(runner_options *o)
     o->tx = "-";
     o->channel = "can0";
     o->listen = "127.0.0.1:29536"; /* socketcand's port */
-    o->spin_us = -1; /* automatic: live.c */
+    o->spin_us = -1;               /* automatic: live.c */
     o->cpu = -1;
 }
 

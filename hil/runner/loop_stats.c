@@ -2,8 +2,8 @@
 
 #include <math.h>
 
-#define FINE_NS 100
-#define COARSE_NS 100000
+#define FINE_NS      100
+#define COARSE_NS    100000
 #define FINE_SPAN_NS ((int64_t)LOOP_FINE_BINS * FINE_NS)
 
 void loop_histogram_add(loop_histogram *h, int64_t ns)
@@ -49,9 +49,10 @@ double loop_histogram_quantile_us(const loop_histogram *h, double q)
 
 void loop_histogram_json(FILE *out, const char *name, const loop_histogram *h)
 {
-    fprintf(out, "\"%s\": {\"count\": %llu, \"median_us\": %.3f, \"p99_us\": %.3f, \"p999_us\": %.3f, "
-                 "\"max_us\": %.3f, \"mean_us\": %.3f}",
-            name, (unsigned long long)h->count, loop_histogram_quantile_us(h, 0.5),
-            loop_histogram_quantile_us(h, 0.99), loop_histogram_quantile_us(h, 0.999), (double)h->max_ns / 1e3,
+    fprintf(out,
+            "\"%s\": {\"count\": %llu, \"median_us\": %.3f, \"p99_us\": %.3f, \"p999_us\": %.3f, "
+            "\"max_us\": %.3f, \"mean_us\": %.3f}",
+            name, (unsigned long long)h->count, loop_histogram_quantile_us(h, 0.5), loop_histogram_quantile_us(h, 0.99),
+            loop_histogram_quantile_us(h, 0.999), (double)h->max_ns / 1e3,
             h->count ? h->sum_ns / (double)h->count / 1e3 : 0.0);
 }

@@ -9,7 +9,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#define LOOP_FINE_BINS 100000u   /* 100 ns each: [0, 10 ms) */
+#define LOOP_FINE_BINS   100000u /* 100 ns each: [0, 10 ms) */
 #define LOOP_COARSE_BINS 100000u /* 100 us each: [10 ms, 10 s) */
 
 typedef struct {

@@ -22,15 +22,15 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define KEY_SIZE 80
+#define KEY_SIZE   80
 #define MAX_FIELDS 96
 
 /* The runner's own key: the ambient and measured temperature inputs. */
 static const gs_param_options no_options = {"", NULL, 0};
 static const gs_param_info run_info[] = {
     {"ambient_temperature", "ambient_temperature", "ambient_temperature_K", "K", "K",
-     "ambient and measured temperature inputs (> 0)", GS_PARAM_REAL, GS_PARAM_FIXED, offsetof(runner_params, ambient_temperature_K),
-     sizeof(gs_real), 1, 1, "", "", NULL, 0, &no_options},
+     "ambient and measured temperature inputs (> 0)", GS_PARAM_REAL, GS_PARAM_FIXED,
+     offsetof(runner_params, ambient_temperature_K), sizeof(gs_real), 1, 1, "", "", NULL, 0, &no_options},
 };
 
 enum { GROUP_BLOCK = 0, GROUP_RIG = 1, GROUP_RUN = 2 };
@@ -103,8 +103,7 @@ static int block_fields(field_list *list, gs_rig_block block)
 {
     const int gear = block == GS_RIG_SIMPLE_GEAR;
     return add_fields(list, "block.", gear ? gs_simple_gear_param_info : gs_rack_pinion_param_info,
-                      gear ? (size_t)GS_SIMPLE_GEAR_PARAM_FIELDS : (size_t)GS_RACK_PINION_PARAM_FIELDS, GROUP_BLOCK,
-                      0);
+                      gear ? (size_t)GS_SIMPLE_GEAR_PARAM_FIELDS : (size_t)GS_RACK_PINION_PARAM_FIELDS, GROUP_BLOCK, 0);
 }
 
 typedef struct {
@@ -211,16 +210,20 @@ static int set_reals(const parse_context *ctx, const field *f, char *value, unsi
 static int set_field(const parse_context *ctx, const field *f, char *value, unsigned char *where)
 {
     switch (f->info->kind) {
-    case GS_PARAM_OPTION: return set_option(ctx, f, value, where);
+    case GS_PARAM_OPTION:
+        return set_option(ctx, f, value, where);
     case GS_PARAM_BOOL:
         return f->info->options->count > 0 ? set_option(ctx, f, value, where) : set_integer(ctx, f, value, where);
     case GS_PARAM_INT:
-    case GS_PARAM_COUNT: return set_integer(ctx, f, value, where);
+    case GS_PARAM_COUNT:
+        return set_integer(ctx, f, value, where);
     case GS_PARAM_REAL:
     case GS_PARAM_ARRAY:
     case GS_PARAM_TABLE:
-    case GS_PARAM_MATRIX: return set_reals(ctx, f, value, where);
-    case GS_PARAM_GROUP: break; /* flattened by add_fields */
+    case GS_PARAM_MATRIX:
+        return set_reals(ctx, f, value, where);
+    case GS_PARAM_GROUP:
+        break; /* flattened by add_fields */
     }
     return parse_error(ctx, f->key, "not a value");
 }
@@ -236,13 +239,14 @@ static unsigned char *group_base(runner_params *out, int group)
     switch (group) {
     case GROUP_BLOCK:
         return out->block == GS_RIG_SIMPLE_GEAR ? (unsigned char *)&out->gear : (unsigned char *)&out->rack;
-    case GROUP_RIG: return (unsigned char *)&out->rig;
-    default: return (unsigned char *)out;
+    case GROUP_RIG:
+        return (unsigned char *)&out->rig;
+    default:
+        return (unsigned char *)out;
     }
 }
 
-static int parse_block_line(parse_context *ctx, parse_state *st, const char *key, const char *value,
-                            runner_params *out)
+static int parse_block_line(parse_context *ctx, parse_state *st, const char *key, const char *value, runner_params *out)
 {
     if (st->block_seen) {
         return parse_error(ctx, key, "given twice");

@@ -13,8 +13,8 @@ typedef struct {
     gs_rig_block block;
     gs_simple_gear_params gear;
     gs_rack_pinion_params rack;
-    gs_rig_params rig;               /* dt_s comes from --period / --substeps */
-    gs_real ambient_temperature_K;   /* run.ambient_temperature_K, default 293.15 */
+    gs_rig_params rig;             /* dt_s comes from --period / --substeps */
+    gs_real ambient_temperature_K; /* run.ambient_temperature_K, default 293.15 */
 } runner_params;
 
 /* Read path into *out. On failure returns -1 with one line in message:

@@ -25,7 +25,7 @@
 #include "recorder.h"
 #include "transport.h"
 
-#define RUNNER_EXIT_BAD_INPUT 2
+#define RUNNER_EXIT_BAD_INPUT      2
 #define RUNNER_EXIT_VERDICT_FAILED 3 /* the run ended; an expectation of the scenario failed */
 
 typedef struct {

@@ -136,8 +136,9 @@ static void print_json_counters(FILE *out, const runner *r)
     }
     char t1[32], t2[32], t3[32];
     double simulated_s = (double)c->count[GS_HIL_COUNT_PERIODS] * b->period_s;
-    fprintf(out, "}, \"steps\": %llu, \"pending\": %u, \"simulated_time\": %s, \"period\": %s, "
-                 "\"substeps\": %ld, \"timeout\": %s, ",
+    fprintf(out,
+            "}, \"steps\": %llu, \"pending\": %u, \"simulated_time\": %s, \"period\": %s, "
+            "\"substeps\": %ld, \"timeout\": %s, ",
             (unsigned long long)c->steps, gs_hil_pending(b), exact(simulated_s, t1, sizeof t1),
             exact(b->period_s, t2, sizeof t2), r->options.substeps,
             exact((double)b->timeout_periods * b->period_s, t3, sizeof t3));
@@ -155,8 +156,9 @@ static void print_json(const runner *r)
     FILE *out = stderr;
     fputs("{", out);
     print_json_counters(out, r);
-    fprintf(out, "\"frames_in\": %llu, \"frames_out\": %llu, \"malformed_lines\": %llu, \"write_errors\": %llu, "
-                 "\"wall_time\": %.6f, \"cpu_time\": %.6f",
+    fprintf(out,
+            "\"frames_in\": %llu, \"frames_out\": %llu, \"malformed_lines\": %llu, \"write_errors\": %llu, "
+            "\"wall_time\": %.6f, \"cpu_time\": %.6f",
             (unsigned long long)rep->frames_in, (unsigned long long)rep->frames_out,
             (unsigned long long)rep->malformed_lines, (unsigned long long)rep->write_errors, rep->wall_s, rep->cpu_s);
     fprintf(out, ", \"client_connects\": %llu, \"client_disconnects\": %llu, \"log_written\": %llu",

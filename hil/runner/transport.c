@@ -96,8 +96,7 @@ int transport_open_socketcan(transport *t, const char *ifname, char *message, si
     int fd = socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
     if (fd < 0) {
         int e = errno;
-        snprintf(message, size,
-                 "--channel %s: cannot open a SocketCAN socket: %s%s", ifname, strerror(e),
+        snprintf(message, size, "--channel %s: cannot open a SocketCAN socket: %s%s", ifname, strerror(e),
                  e == EAFNOSUPPORT ? " (this kernel has no AF_CAN; load it with modprobe can_raw, or use "
                                      "--transport candump)"
                                    : "");
@@ -222,8 +221,8 @@ int transport_open_socketcand(transport *t, const char *listen_spec, const char 
     const char *colon = strrchr(listen_spec, ':');
     char *end = NULL;
     long port = colon != NULL ? strtol(colon + 1, &end, 10) : -1;
-    if (colon == NULL || (size_t)(colon - listen_spec) >= sizeof host || end == colon + 1 || *end != '\0' ||
-        port < 0 || port > 65535) {
+    if (colon == NULL || (size_t)(colon - listen_spec) >= sizeof host || end == colon + 1 || *end != '\0' || port < 0 ||
+        port > 65535) {
         snprintf(message, size, "--listen %s: expected HOST:PORT (e.g. 127.0.0.1:29536)", listen_spec);
         return -1;
     }
@@ -328,8 +327,8 @@ static unsigned sc_message(transport *t, char *text, double now_s, transport_han
 {
     char *word[4 + GS_HIL_MAX_DATA];
     int words = 0;
-    for (char *save = NULL, *w = strtok_r(text, " \t\r\n", &save); w != NULL && words < (int)(sizeof word / sizeof word[0]);
-         w = strtok_r(NULL, " \t\r\n", &save)) {
+    for (char *save = NULL, *w = strtok_r(text, " \t\r\n", &save);
+         w != NULL && words < (int)(sizeof word / sizeof word[0]); w = strtok_r(NULL, " \t\r\n", &save)) {
         word[words++] = w;
     }
     if (words == 0) {
@@ -420,10 +419,13 @@ static unsigned poll_socketcand(transport *t, double now_s, transport_handler ha
 unsigned transport_poll(transport *t, double now_s, transport_handler handler, void *context)
 {
     switch (t->kind) {
-    case TRANSPORT_SOCKETCAN: return poll_socketcan(t, now_s, handler, context);
-    case TRANSPORT_SOCKETCAND: return poll_socketcand(t, now_s, handler, context);
+    case TRANSPORT_SOCKETCAN:
+        return poll_socketcan(t, now_s, handler, context);
+    case TRANSPORT_SOCKETCAND:
+        return poll_socketcand(t, now_s, handler, context);
     case TRANSPORT_CANDUMP:
-    default: return poll_candump(t, now_s, handler, context);
+    default:
+        return poll_candump(t, now_s, handler, context);
     }
 }
 
@@ -470,9 +472,9 @@ int transport_send(transport *t, const gs_hil_frame *frame, double stamp_s)
         t->tx_start = 0;
     }
     size_t room = sizeof t->tx_buf - t->tx_end;
-    size_t n = t->kind == TRANSPORT_SOCKETCAND ? sc_format(frame, stamp_s, t->tx_buf + t->tx_end, room)
-                                               : candump_format_line(frame, stamp_s, t->channel, t->tx_buf + t->tx_end,
-                                                                     room);
+    size_t n = t->kind == TRANSPORT_SOCKETCAND
+                   ? sc_format(frame, stamp_s, t->tx_buf + t->tx_end, room)
+                   : candump_format_line(frame, stamp_s, t->channel, t->tx_buf + t->tx_end, room);
     if (n == 0) {
         return -1; /* no room: the reader is too slow */
     }
@@ -517,8 +519,8 @@ void transport_flush(transport *t)
 
 void transport_drain(transport *t, int timeout_ms)
 {
-    for (int waited = 0; t->kind != TRANSPORT_SOCKETCAN && t->tx_fd >= 0 && t->tx_start < t->tx_end &&
-                         waited < timeout_ms;
+    for (int waited = 0;
+         t->kind != TRANSPORT_SOCKETCAN && t->tx_fd >= 0 && t->tx_start < t->tx_end && waited < timeout_ms;
          waited += 10) {
         transport_flush(t);
         if (t->tx_start < t->tx_end) {

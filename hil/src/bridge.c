@@ -14,9 +14,8 @@
 /* The counters whose growth sets the latched flags, in flag order from
  * GS_HIL_FLAG_CMD_REJECTED on. */
 static const gs_hil_count latched_counts[GS_HIL_LATCHED_FLAGS] = {
-    GS_HIL_COUNT_RX_REJECTED,   GS_HIL_COUNT_RX_LATE,        GS_HIL_COUNT_SATURATIONS,
-    GS_HIL_COUNT_OVERRUNS,      GS_HIL_COUNT_TX_ERRORS,      GS_HIL_COUNT_PARAM_CHANGES,
-    GS_HIL_COUNT_PARAM_REFUSED, GS_HIL_COUNT_LOG_DROPPED,
+    GS_HIL_COUNT_RX_REJECTED, GS_HIL_COUNT_RX_LATE,       GS_HIL_COUNT_SATURATIONS,   GS_HIL_COUNT_OVERRUNS,
+    GS_HIL_COUNT_TX_ERRORS,   GS_HIL_COUNT_PARAM_CHANGES, GS_HIL_COUNT_PARAM_REFUSED, GS_HIL_COUNT_LOG_DROPPED,
 };
 
 static gs_hil_count reason_class(gs_hil_reason reason)
@@ -60,8 +59,8 @@ static gs_hil_status check_cycles(gs_hil_bridge *b, gs_hil_error *err)
         if (fabs(n - whole) > 1e-6 * (n > 1.0 ? n : 1.0) || whole < 1.0 || whole > 4294967295.0) {
             char text[200];
             snprintf(text, sizeof text,
-                     "feedback frame %s: cycle time %u ms is not a whole number of frame periods (%g ms)",
-                     f->name, f->cycle_ms, b->period_s * 1e3);
+                     "feedback frame %s: cycle time %u ms is not a whole number of frame periods (%g ms)", f->name,
+                     f->cycle_ms, b->period_s * 1e3);
             return fail(err, "period", text);
         }
         b->cycle_periods[i] = (unsigned)whole;
@@ -410,14 +409,21 @@ int gs_hil_condition_holds_(const gs_hil_bridge *b, const gs_hil_condition *c)
 {
     double x = gs_hil_source_value_(b, c), v = c->value;
     switch (c->op) {
-    case GS_HIL_OP_LT: return x < v;
-    case GS_HIL_OP_LE: return x <= v;
-    case GS_HIL_OP_GT: return x > v;
-    case GS_HIL_OP_GE: return x >= v;
-    case GS_HIL_OP_EQ: return x <= v && x >= v;
-    case GS_HIL_OP_NE: return x < v || x > v;
+    case GS_HIL_OP_LT:
+        return x < v;
+    case GS_HIL_OP_LE:
+        return x <= v;
+    case GS_HIL_OP_GT:
+        return x > v;
+    case GS_HIL_OP_GE:
+        return x >= v;
+    case GS_HIL_OP_EQ:
+        return x <= v && x >= v;
+    case GS_HIL_OP_NE:
+        return x < v || x > v;
     case GS_HIL_OPS:
-    default: return 0;
+    default:
+        return 0;
     }
 }
 

@@ -363,8 +363,9 @@ static gs_hil_status check_range(const gs_hil_frame_spec *f, const gs_hil_signal
     gs_hil_frame_kind from = kind_of_role(sig->role); /* what the rig sends must never wrap */
     int feedback = from == GS_HIL_FRAME_FEEDBACK || from == GS_HIL_FRAME_ACK;
     if (feedback && (minimum < low - tol || maximum > high + tol)) {
-        return refuse(err, "%s.%s: range [%.10g, %.10g] does not fit %u %s bits at scale %.10g ([%.10g, %.10g]); "
-                           "values would wrap",
+        return refuse(err,
+                      "%s.%s: range [%.10g, %.10g] does not fit %u %s bits at scale %.10g ([%.10g, %.10g]); "
+                      "values would wrap",
                       f->name, sig->name, minimum, maximum, sig->length, sig->is_signed ? "signed" : "unsigned",
                       sig->scale, low, high);
     }
@@ -378,8 +379,8 @@ static gs_hil_status check_mode(const gs_hil_frame_spec *f, const gs_hil_signal 
     }
     for (unsigned c = 0; c < sig->choice_count; ++c) {
         if (gs_hil_mode_parse(sig->choices[c].name) < 0) {
-            return refuse(err, "%s.%s: mode value %lld is named '%s'; expected one of Disabled, Speed, Torque",
-                          f->name, sig->name, (long long)sig->choices[c].value, sig->choices[c].name);
+            return refuse(err, "%s.%s: mode value %lld is named '%s'; expected one of Disabled, Speed, Torque", f->name,
+                          sig->name, (long long)sig->choices[c].value, sig->choices[c].name);
         }
     }
     return GS_HIL_OK;
@@ -517,8 +518,7 @@ gs_hil_status gs_hil_dbc_check(const gs_hil_dbc *dbc, gs_hil_error *err)
         return refuse(err, "%u command frames; at most %u", command_frames, GS_HIL_MAX_COMMAND_FRAMES);
     }
     if (param_frames > 1u || ack_frames > 1u) {
-        return refuse(err, "%u parameter and %u acknowledgement frames; at most one of each", param_frames,
-                      ack_frames);
+        return refuse(err, "%u parameter and %u acknowledgement frames; at most one of each", param_frames, ack_frames);
     }
     return check_unique_roles(dbc, err);
 }

@@ -98,9 +98,8 @@ static gs_hil_status check_values(const gs_hil_fault_spec *f, gs_hil_error *err)
     case GS_HIL_FAULT_QUANTISE:
         return isfinite(f->value) && f->value > 0.0 ? GS_HIL_OK : refuse(err, "value", "quantise: a step > 0");
     case GS_HIL_FAULT_CLAMP:
-        return !isnan(f->value) && !isnan(f->value2) && f->value <= f->value2
-                   ? GS_HIL_OK
-                   : refuse(err, "min", "clamp: min <= max");
+        return !isnan(f->value) && !isnan(f->value2) && f->value <= f->value2 ? GS_HIL_OK
+                                                                              : refuse(err, "min", "clamp: min <= max");
     case GS_HIL_FAULT_DELAY:
         return f->periods >= 1u && f->periods < GS_HIL_DELAY_MAX
                    ? GS_HIL_OK
@@ -197,21 +196,39 @@ double gs_hil_fault_value_(gs_hil_bridge *b, unsigned frame, unsigned signal, do
             continue;
         }
         switch (s->kind) {
-        case GS_HIL_FAULT_OFFSET: x += s->value; break;
-        case GS_HIL_FAULT_GAIN: x *= s->value; break;
-        case GS_HIL_FAULT_NOISE: x += s->value * normal(&f->rng); break;
-        case GS_HIL_FAULT_FREEZE: x = f->has_last ? f->last_value : x; break;
-        case GS_HIL_FAULT_STUCK: x = s->value; break;
-        case GS_HIL_FAULT_DELAY: x = delayed(f, n); break;
-        case GS_HIL_FAULT_QUANTISE: x = quantise(x, s->value); break;
-        case GS_HIL_FAULT_CLAMP: x = x < s->value ? s->value : x > s->value2 ? s->value2 : x; break;
-        case GS_HIL_FAULT_DROPOUT: continue; /* acts on the frame: gs_hil_fault_frame_ */
+        case GS_HIL_FAULT_OFFSET:
+            x += s->value;
+            break;
+        case GS_HIL_FAULT_GAIN:
+            x *= s->value;
+            break;
+        case GS_HIL_FAULT_NOISE:
+            x += s->value * normal(&f->rng);
+            break;
+        case GS_HIL_FAULT_FREEZE:
+            x = f->has_last ? f->last_value : x;
+            break;
+        case GS_HIL_FAULT_STUCK:
+            x = s->value;
+            break;
+        case GS_HIL_FAULT_DELAY:
+            x = delayed(f, n);
+            break;
+        case GS_HIL_FAULT_QUANTISE:
+            x = quantise(x, s->value);
+            break;
+        case GS_HIL_FAULT_CLAMP:
+            x = x < s->value ? s->value : x > s->value2 ? s->value2 : x;
+            break;
+        case GS_HIL_FAULT_DROPOUT:
+            continue; /* acts on the frame: gs_hil_fault_frame_ */
         case GS_HIL_FAULT_DROP:
         case GS_HIL_FAULT_DUPLICATE:
         case GS_HIL_FAULT_CORRUPT:
         case GS_HIL_FAULT_COUNTER_STOP:
         case GS_HIL_FAULTS:
-        default: continue;
+        default:
+            continue;
         }
         counted(b, f);
     }
@@ -245,9 +262,15 @@ unsigned gs_hil_fault_frame_(gs_hil_bridge *b, unsigned frame_index, gs_hil_fram
         }
         switch (s->kind) {
         case GS_HIL_FAULT_DROPOUT:
-        case GS_HIL_FAULT_DROP: copies = 0; break;
-        case GS_HIL_FAULT_DUPLICATE: copies = copies > 0u ? 2u : 0u; break;
-        case GS_HIL_FAULT_CORRUPT: flip_bits(f, frame); break;
+        case GS_HIL_FAULT_DROP:
+            copies = 0;
+            break;
+        case GS_HIL_FAULT_DUPLICATE:
+            copies = copies > 0u ? 2u : 0u;
+            break;
+        case GS_HIL_FAULT_CORRUPT:
+            flip_bits(f, frame);
+            break;
         case GS_HIL_FAULT_OFFSET:
         case GS_HIL_FAULT_GAIN:
         case GS_HIL_FAULT_NOISE:
@@ -258,7 +281,8 @@ unsigned gs_hil_fault_frame_(gs_hil_bridge *b, unsigned frame_index, gs_hil_fram
         case GS_HIL_FAULT_CLAMP:
         case GS_HIL_FAULT_COUNTER_STOP:
         case GS_HIL_FAULTS:
-        default: continue;
+        default:
+            continue;
         }
         counted(b, f);
     }

@@ -256,13 +256,27 @@ static void put_escaped(text *t, const char *s)
 {
     for (; *s != '\0'; ++s) {
         switch (*s) {
-        case '&': put(t, "&amp;"); break;
-        case '<': put(t, "&lt;"); break;
-        case '>': put(t, "&gt;"); break;
-        case '"': put(t, "&quot;"); break;
-        case '\'': put(t, "&apos;"); break;
-        case '\n': put(t, "&#10;"); break;
-        case '\t': put(t, "&#9;"); break;
+        case '&':
+            put(t, "&amp;");
+            break;
+        case '<':
+            put(t, "&lt;");
+            break;
+        case '>':
+            put(t, "&gt;");
+            break;
+        case '"':
+            put(t, "&quot;");
+            break;
+        case '\'':
+            put(t, "&apos;");
+            break;
+        case '\n':
+            put(t, "&#10;");
+            break;
+        case '\t':
+            put(t, "&#9;");
+            break;
         default:
             if ((unsigned char)*s >= 0x20u) {
                 put(t, "%c", *s);
@@ -287,8 +301,8 @@ static void failure_text(const gs_hil_bridge *b, unsigned i, char *out, size_t s
         snprintf(out, size, "the run ended at %.6g s, before the window closed at %.6g s", t,
                  (double)e->end_period * b->period_s);
     } else if (d->mode == GS_HIL_EXPECT_WITHIN) {
-        snprintf(out, size, "never %s from %.6g s to %.6g s (last: %s)", d->what,
-                 (double)e->start_period * b->period_s, (double)e->end_period * b->period_s, seen);
+        snprintf(out, size, "never %s from %.6g s to %.6g s (last: %s)", d->what, (double)e->start_period * b->period_s,
+                 (double)e->end_period * b->period_s, seen);
     } else {
         snprintf(out, size, "%s at %.6g s: expected %s", seen, t, d->what);
     }
@@ -351,10 +365,9 @@ size_t gs_hil_junit(const gs_hil_bridge *b, char *out, size_t size)
     put_escaped(&t, b->config.dbc->name);
     put(&t, "\"/>\n");
     put(&t, "      <property name=\"period\" value=\"%.9g\"/>\n", b->period_s);
-    static const gs_hil_count shown[] = {GS_HIL_COUNT_PERIODS,       GS_HIL_COUNT_RX_USED,
-                                         GS_HIL_COUNT_RX_REJECTED,   GS_HIL_COUNT_TIMEOUTS,
-                                         GS_HIL_COUNT_FAULTS,        GS_HIL_COUNT_PARAM_CHANGES,
-                                         GS_HIL_COUNT_PARAM_REFUSED, GS_HIL_COUNT_SATURATIONS};
+    static const gs_hil_count shown[] = {
+        GS_HIL_COUNT_PERIODS, GS_HIL_COUNT_RX_USED,       GS_HIL_COUNT_RX_REJECTED,   GS_HIL_COUNT_TIMEOUTS,
+        GS_HIL_COUNT_FAULTS,  GS_HIL_COUNT_PARAM_CHANGES, GS_HIL_COUNT_PARAM_REFUSED, GS_HIL_COUNT_SATURATIONS};
     for (size_t k = 0; k < sizeof shown / sizeof shown[0]; ++k) {
         put(&t, "      <property name=\"%s\" value=\"%llu\"/>\n", gs_hil_count_name(shown[k]),
             (unsigned long long)b->counters.count[shown[k]]);

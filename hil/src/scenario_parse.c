@@ -14,7 +14,7 @@
 
 #include "internal.h"
 
-#define KEY_MAX 32
+#define KEY_MAX    32
 #define TABLE_KEYS 24
 
 typedef enum { VALUE_STRING = 0, VALUE_NUMBER, VALUE_BOOL } value_type;
@@ -44,7 +44,7 @@ typedef struct {
     table t;
     int seen_scenario;
     int have_duration;
-    double last_at;      /* the latest step time, checked against the duration */
+    double last_at; /* the latest step time, checked against the duration */
     unsigned last_at_line;
 } parser;
 
@@ -87,8 +87,7 @@ static int rest_is_empty(const char *c, const char *end)
     return c == end || *c == '#';
 }
 
-static gs_hil_status read_string(parser *p, unsigned line, const char *key, const char **c, const char *end,
-                                 entry *e)
+static gs_hil_status read_string(parser *p, unsigned line, const char *key, const char **c, const char *end, entry *e)
 {
     char quote = **c;
     size_t n = 0;
@@ -100,11 +99,20 @@ static gs_hil_status read_string(parser *p, unsigned line, const char *key, cons
                 break;
             }
             switch (*q) {
-            case '"': ch = '"'; break;
-            case '\\': ch = '\\'; break;
-            case 'n': ch = '\n'; break;
-            case 't': ch = '\t'; break;
-            default: return fail(p, line, key, "escape \\%c is not used in a scenario (\\\" \\\\ \\n \\t)", *q);
+            case '"':
+                ch = '"';
+                break;
+            case '\\':
+                ch = '\\';
+                break;
+            case 'n':
+                ch = '\n';
+                break;
+            case 't':
+                ch = '\t';
+                break;
+            default:
+                return fail(p, line, key, "escape \\%c is not used in a scenario (\\\" \\\\ \\n \\t)", *q);
             }
         }
         if ((unsigned char)ch < 0x20u && ch != '\t') {
@@ -126,8 +134,7 @@ static gs_hil_status read_string(parser *p, unsigned line, const char *key, cons
 
 /* A TOML decimal number: [+-] digits (single underscores between them)
  * [. digits] [e [+-] digits]; inf and nan are refused. */
-static gs_hil_status read_number(parser *p, unsigned line, const char *key, const char **c, const char *end,
-                                 entry *e)
+static gs_hil_status read_number(parser *p, unsigned line, const char *key, const char **c, const char *end, entry *e)
 {
     char digits[64];
     size_t n = 0;
@@ -161,8 +168,7 @@ static gs_hil_status read_number(parser *p, unsigned line, const char *key, cons
     return GS_HIL_OK;
 }
 
-static gs_hil_status read_value(parser *p, unsigned line, const char *key, const char **c, const char *end,
-                                entry *e)
+static gs_hil_status read_value(parser *p, unsigned line, const char *key, const char **c, const char *end, entry *e)
 {
     size_t left = (size_t)(end - *c);
     if (**c == '"' || **c == '\'') {
@@ -240,8 +246,8 @@ static gs_hil_status key_value(parser *p, unsigned line, const char *c, const ch
     snprintf(key, sizeof key, "%.*s", (int)(c - k), k);
     c = skip_blank(c, end);
     if (c == end || *c != '=') {
-        return fail(p, line, key, c < end && *c == '.' ? "dotted keys are not used in a scenario"
-                                                       : "expected 'key = value'");
+        return fail(p, line, key,
+                    c < end && *c == '.' ? "dotted keys are not used in a scenario" : "expected 'key = value'");
     }
     c = skip_blank(c + 1, end);
     if (c == end) {
@@ -392,12 +398,11 @@ static int find_signal(const gs_hil_dbc *dbc, const char *text, gs_hil_frame_kin
         const char *name = dot != NULL ? dot + 1 : text;
         for (unsigned k = 0; k < f->signal_count; ++k) {
             const gs_hil_signal *sig = &f->signals[k];
-            int usable = kind == GS_HIL_FRAME_COMMAND ? gs_hil_role_command_index(sig->role) >= 0
-                                                      : (sig->role == GS_HIL_ROLE_OUT ||
-                                                         sig->role == GS_HIL_ROLE_OUT_FOLLOWER_ANGLE ||
-                                                         sig->role == GS_HIL_ROLE_IN_BASE_SPEED ||
-                                                         sig->role == GS_HIL_ROLE_IN_BASE_TORQUE ||
-                                                         sig->role == GS_HIL_ROLE_IN_LOAD);
+            int usable = kind == GS_HIL_FRAME_COMMAND
+                             ? gs_hil_role_command_index(sig->role) >= 0
+                             : (sig->role == GS_HIL_ROLE_OUT || sig->role == GS_HIL_ROLE_OUT_FOLLOWER_ANGLE ||
+                                sig->role == GS_HIL_ROLE_IN_BASE_SPEED || sig->role == GS_HIL_ROLE_IN_BASE_TORQUE ||
+                                sig->role == GS_HIL_ROLE_IN_LOAD);
             if (usable && strcmp(sig->name, name) == 0) {
                 *frame = i;
                 *signal = k;
@@ -515,7 +520,8 @@ static gs_hil_status time_after(parser *p, const char *key, double at, double *o
         return GS_HIL_E_CONFIG;
     }
     if (strcmp(key, "until") == 0 ? !(*out > at) : !(*out > 0.0)) {
-        return fail(p, line_of(p, key), key, strcmp(key, "until") == 0 ? "a time after the step's 'at'" : "a time > 0 s");
+        return fail(p, line_of(p, key), key,
+                    strcmp(key, "until") == 0 ? "a time after the step's 'at'" : "a time > 0 s");
     }
     return GS_HIL_OK;
 }
@@ -526,18 +532,25 @@ static const char *fault_keys(gs_hil_fault_kind kind)
     case GS_HIL_FAULT_OFFSET:
     case GS_HIL_FAULT_GAIN:
     case GS_HIL_FAULT_STUCK:
-    case GS_HIL_FAULT_QUANTISE: return "at name fault signal value until duration when";
-    case GS_HIL_FAULT_NOISE: return "at name fault signal value seed until duration when";
-    case GS_HIL_FAULT_CLAMP: return "at name fault signal min max until duration when";
-    case GS_HIL_FAULT_DELAY: return "at name fault signal periods until duration when";
+    case GS_HIL_FAULT_QUANTISE:
+        return "at name fault signal value until duration when";
+    case GS_HIL_FAULT_NOISE:
+        return "at name fault signal value seed until duration when";
+    case GS_HIL_FAULT_CLAMP:
+        return "at name fault signal min max until duration when";
+    case GS_HIL_FAULT_DELAY:
+        return "at name fault signal periods until duration when";
     case GS_HIL_FAULT_FREEZE:
-    case GS_HIL_FAULT_DROPOUT: return "at name fault signal until duration when";
-    case GS_HIL_FAULT_CORRUPT: return "at name fault frame bits seed until duration when";
+    case GS_HIL_FAULT_DROPOUT:
+        return "at name fault signal until duration when";
+    case GS_HIL_FAULT_CORRUPT:
+        return "at name fault frame bits seed until duration when";
     case GS_HIL_FAULT_DROP:
     case GS_HIL_FAULT_DUPLICATE:
     case GS_HIL_FAULT_COUNTER_STOP:
     case GS_HIL_FAULTS:
-    default: return "at name fault frame until duration when";
+    default:
+        return "at name fault frame until duration when";
     }
 }
 
@@ -602,7 +615,8 @@ static gs_hil_status fault_values(parser *p, gs_hil_fault_spec *f)
         break;
     case GS_HIL_FAULT_OFFSET:
     case GS_HIL_FAULT_GAIN:
-    case GS_HIL_FAULT_STUCK: return number(p, "value", 1, &f->value);
+    case GS_HIL_FAULT_STUCK:
+        return number(p, "value", 1, &f->value);
     case GS_HIL_FAULT_CLAMP:
         f->value = -HUGE_VAL;
         f->value2 = HUGE_VAL;
@@ -616,7 +630,8 @@ static gs_hil_status fault_values(parser *p, gs_hil_fault_spec *f)
             return fail(p, line_of(p, "max"), "max", "clamp: max >= min");
         }
         break;
-    case GS_HIL_FAULT_DELAY: return whole(p, "periods", 1.0, (double)(GS_HIL_DELAY_MAX - 1), &f->periods);
+    case GS_HIL_FAULT_DELAY:
+        return whole(p, "periods", 1.0, (double)(GS_HIL_DELAY_MAX - 1), &f->periods);
     case GS_HIL_FAULT_CORRUPT:
         f->periods = 1;
         return find(p, "bits") != NULL ? whole(p, "bits", 1.0, 64.0, &f->periods) : GS_HIL_OK;
@@ -626,7 +641,8 @@ static gs_hil_status fault_values(parser *p, gs_hil_fault_spec *f)
     case GS_HIL_FAULT_DUPLICATE:
     case GS_HIL_FAULT_COUNTER_STOP:
     case GS_HIL_FAULTS:
-    default: break;
+    default:
+        break;
     }
     return GS_HIL_OK;
 }
@@ -715,8 +731,8 @@ static gs_hil_status expect_range(parser *p, gs_hil_expect_def *e, const char *t
         if (eq->type == VALUE_STRING) {
             int mode = sig != NULL && sig->role == GS_HIL_ROLE_CMD_MODE ? gs_hil_mode_parse(eq->text) : -1;
             if (mode < 0) {
-                return fail(p, eq->line, "equals", "'%s': a name is a mode (disabled, speed, torque) of a cmd.mode signal",
-                            eq->text);
+                return fail(p, eq->line, "equals",
+                            "'%s': a name is a mode (disabled, speed, torque) of a cmd.mode signal", eq->text);
             }
             v = (double)mode;
             snprintf(e->what, sizeof e->what, "%.60s == %s", target, gs_hil_mode_name((gs_hil_mode)mode));
@@ -881,10 +897,13 @@ static gs_hil_status step_table(parser *p)
 static gs_hil_status close_table(parser *p)
 {
     switch (p->t.kind) {
-    case TABLE_SCENARIO: return scenario_table(p);
-    case TABLE_STEP: return step_table(p);
+    case TABLE_SCENARIO:
+        return scenario_table(p);
+    case TABLE_STEP:
+        return step_table(p);
     case TABLE_NONE:
-    default: return GS_HIL_OK;
+    default:
+        return GS_HIL_OK;
     }
 }
 
@@ -943,7 +962,8 @@ gs_hil_status gs_hil_scenario_parse(gs_hil_scenario *s, const char *text, size_t
         return GS_HIL_E_CONFIG;
     }
     if (!p.have_duration) {
-        return fail(&p, line > 0u ? line : 1u, "[scenario]", "missing: a scenario starts with [scenario] and its duration");
+        return fail(&p, line > 0u ? line : 1u, "[scenario]",
+                    "missing: a scenario starts with [scenario] and its duration");
     }
     if (p.last_at > s->duration_s) {
         return fail(&p, p.last_at_line, "at", "%g s is after the scenario's duration (%g s)", p.last_at, s->duration_s);

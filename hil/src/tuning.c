@@ -122,8 +122,8 @@ static int element_in_use(gs_rig_block block, const gs_hil_rig_params *params, c
     return (int)(element / GS_TABLE_MAX) < rows && (int)(element % GS_TABLE_MAX) < columns;
 }
 
-gs_hil_param_result gs_hil_param_set(gs_rig_block block, gs_hil_rig_params *params, unsigned index,
-                                     unsigned element, double value)
+gs_hil_param_result gs_hil_param_set(gs_rig_block block, gs_hil_rig_params *params, unsigned index, unsigned element,
+                                     double value)
 {
     int is_rig = 0;
     const gs_param_info *e = gs_hil_param_info(block, index, &is_rig);
@@ -197,9 +197,8 @@ int gs_hil_param_parse(gs_rig_block block, const char *text, unsigned *index, un
 static gs_hil_status init_rig(const gs_hil_bridge *b, const gs_hil_rig_params *p, gs_rig_consts *consts,
                               gs_rig_state *scratch, gs_error *err)
 {
-    gs_status status = b->block == GS_RIG_SIMPLE_GEAR
-                           ? gs_rig_init_gear(consts, scratch, &p->block.gear, &p->rig, err)
-                           : gs_rig_init_rack(consts, scratch, &p->block.rack, &p->rig, err);
+    gs_status status = b->block == GS_RIG_SIMPLE_GEAR ? gs_rig_init_gear(consts, scratch, &p->block.gear, &p->rig, err)
+                                                      : gs_rig_init_rack(consts, scratch, &p->block.rack, &p->rig, err);
     return status == GS_OK ? GS_HIL_OK : GS_HIL_E_CONFIG;
 }
 
@@ -311,8 +310,8 @@ void gs_hil_init_tuning_(gs_hil_bridge *b, gs_rig_block block)
 {
     const gs_hil_config *c = &b->config;
     b->block = block;
-    b->tunable = c->rig_params != NULL &&
-                 (block == GS_RIG_SIMPLE_GEAR ? c->gear_params != NULL : c->rack_params != NULL);
+    b->tunable =
+        c->rig_params != NULL && (block == GS_RIG_SIMPLE_GEAR ? c->gear_params != NULL : c->rack_params != NULL);
     if (!b->tunable) {
         return;
     }

@@ -46,18 +46,18 @@ typedef struct {
  * uses pinion_speed and rack_velocity (form C). */
 typedef struct {
     gs_real pinion_speed_rad_s;
-    gs_real rack_velocity_m_s;      /* backlash only */
-    gs_real rack_force_N;           /* rigid only: force the outside applies at R */
+    gs_real rack_velocity_m_s; /* backlash only */
+    gs_real rack_force_N;      /* rigid only: force the outside applies at R */
     gs_real heat_flow_W;
     gs_real temperature_K;
     int use_temperature_input;
 } gs_rack_ports_in;
 
 typedef struct {
-    gs_real pinion_torque_Nm;       /* tau_P applied by the outside at P */
-    gs_real rack_force_N;           /* F_R applied by the outside at R */
+    gs_real pinion_torque_Nm; /* tau_P applied by the outside at P */
+    gs_real rack_force_N;     /* F_R applied by the outside at R */
     gs_real rack_velocity_m_s;
-    gs_real mesh_loss_force_N;      /* F_Coul, sign of v_R */
+    gs_real mesh_loss_force_N; /* F_Coul, sign of v_R */
     gs_real mesh_loss_power_W;
     gs_real loss_power_W;
     gs_real temperature_K;
@@ -74,8 +74,8 @@ GS_API gs_real gs_rack_pinion_radius(const gs_rack_pinion_params *params);
 GS_API gs_status gs_rack_pinion_init(gs_rack_pinion_consts *consts, gs_block_state *state,
                                      const gs_rack_pinion_params *params, gs_error *err);
 GS_API void gs_rack_pinion_reset(const gs_rack_pinion_consts *consts, gs_block_state *state);
-GS_API void gs_rack_pinion_step(const gs_rack_pinion_consts *consts, gs_block_state *state,
-                                gs_real dt_s, const gs_rack_ports_in *in, gs_rack_ports_out *out);
+GS_API void gs_rack_pinion_step(const gs_rack_pinion_consts *consts, gs_block_state *state, gs_real dt_s,
+                                const gs_rack_ports_in *in, gs_rack_ports_out *out);
 
 #ifdef __cplusplus
 }

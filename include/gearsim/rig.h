@@ -52,11 +52,11 @@ extern "C" {
 #define gs_rig_init_gear GS_PRECISION_NAME(gs_rig_init_gear)
 #define gs_rig_init_rack GS_PRECISION_NAME(gs_rig_init_rack)
 
-#define GS_MAX_SUBSTEPS 64
+#define GS_MAX_SUBSTEPS      64
 /* The automatic sub-step count (contact_substeps = 0) stops here; see gs_rig_info. */
 #define GS_AUTO_SUBSTEPS_MAX 16
 /* Harmonics of the torque ripple, per revolution and per tooth mesh. */
-#define GS_RIPPLE_HARMONICS 2
+#define GS_RIPPLE_HARMONICS  2
 
 /* How the base shaft is driven (GS_OPTIONS_BaseDrive; default speed) and
  * which temperature the losses use (GS_OPTIONS_TemperatureSource: the thermal
@@ -64,10 +64,7 @@ extern "C" {
 typedef enum { GS_OPTIONS_BaseDrive(GS_OPTION_ENUMERATOR_) } gs_base_drive;
 typedef enum { GS_OPTIONS_TemperatureSource(GS_OPTION_ENUMERATOR_) } gs_temperature_source;
 
-typedef enum {
-    GS_RIG_SIMPLE_GEAR = 0,
-    GS_RIG_RACK_PINION = 1
-} gs_rig_block;
+typedef enum { GS_RIG_SIMPLE_GEAR = 0, GS_RIG_RACK_PINION = 1 } gs_rig_block;
 
 /* What the user sets for the rig: the members of gearsim/parameters.h
  * GS_RIG_PARAM_LIST (name and unit in each rig, valid ranges); defaults from
@@ -136,17 +133,17 @@ GS_API gs_rig_params gs_rig_params_default(void);
 /* What init chose for the contact integration, and the kinematics, for the
  * user to read. */
 typedef struct {
-    int contact_substeps;       /* sub-steps per step (1 without backlash) */
-    gs_real contact_h_omega_n;  /* h*omega_n, omega_n = sqrt(K/m_eff): the contact's
+    int contact_substeps;         /* sub-steps per step (1 without backlash) */
+    gs_real contact_h_omega_n;    /* h*omega_n, omega_n = sqrt(K/m_eff): the contact's
                                    accuracy figure (0 without backlash); <= 0.5 is the
                                    automatic target, about 0.05 resolves a rebound */
-    int substeps_capped;        /* 1 when contact_substeps = 0 chose GS_AUTO_SUBSTEPS_MAX
+    int substeps_capped;          /* 1 when contact_substeps = 0 chose GS_AUTO_SUBSTEPS_MAX
                                    and h*omega_n is still above 0.5: the contact is
                                    stable (backward Euler) but over-damped; lower dt or
                                    set contact_substeps */
-    gs_real follower_per_base;  /* follower speed per base speed of the rigid mesh:
+    gs_real follower_per_base;    /* follower speed per base speed of the rigid mesh:
                                    s/g (rad/s per rad/s) or s_R*r_P (m/s per rad/s) */
-    int compliance_substeps;    /* sub-steps of the compliant shaft (1 without compliance) */
+    int compliance_substeps;      /* sub-steps of the compliant shaft (1 without compliance) */
     gs_real compliance_h_omega_n; /* h*omega_c, omega_c = sqrt(k/J_eff): <= 0.2 unless capped
                                      at GS_AUTO_SUBSTEPS_MAX (0 without compliance) */
 } gs_rig_info;
@@ -158,12 +155,10 @@ GS_API void gs_rig_get_info(const gs_rig_consts *consts, gs_rig_info *info);
  * initial state. err names the failing parameter (block names as in
  * docs/physics.md; rig names e.g. "follower_inertia", "rack_mass", "dt").
  * consts and state are left unchanged on failure. Never allocates. */
-GS_API gs_status gs_rig_init_gear(gs_rig_consts *consts, gs_rig_state *state,
-                                  const gs_simple_gear_params *gear, const gs_rig_params *params,
-                                  gs_error *err);
-GS_API gs_status gs_rig_init_rack(gs_rig_consts *consts, gs_rig_state *state,
-                                  const gs_rack_pinion_params *rack, const gs_rig_params *params,
-                                  gs_error *err);
+GS_API gs_status gs_rig_init_gear(gs_rig_consts *consts, gs_rig_state *state, const gs_simple_gear_params *gear,
+                                  const gs_rig_params *params, gs_error *err);
+GS_API gs_status gs_rig_init_rack(gs_rig_consts *consts, gs_rig_state *state, const gs_rack_pinion_params *rack,
+                                  const gs_rig_params *params, gs_error *err);
 
 /* Sets state to the initial state of consts (speeds, angles, temperature,
  * backlash). */
@@ -175,12 +170,11 @@ GS_API void gs_rig_reset(const gs_rig_consts *consts, gs_rig_state *state);
  * takes its base speed as the initial state, with the follower geared to it
  * (teeth moving together, no acceleration); feed a zero-speed sample first to
  * start at rest. */
-GS_API void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *state, const gs_rig_input *in,
-                        gs_rig_output *out);
+GS_API void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *state, const gs_rig_input *in, gs_rig_output *out);
 
 /* n steps over caller-owned arrays; bit-identical to n calls of gs_rig_step. */
-GS_API void gs_rig_run(const gs_rig_consts *consts, gs_rig_state *state, size_t n,
-                       const gs_rig_input *in, gs_rig_output *out);
+GS_API void gs_rig_run(const gs_rig_consts *consts, gs_rig_state *state, size_t n, const gs_rig_input *in,
+                       gs_rig_output *out);
 
 #ifdef __cplusplus
 }

@@ -49,23 +49,23 @@ typedef struct {
  * use_temperature_input is non-zero; otherwise the thermal state is used. */
 typedef struct {
     gs_real base_speed_rad_s;
-    gs_real follower_speed_rad_s;   /* backlash only */
-    gs_real follower_torque_Nm;     /* rigid only: torque the outside applies at F */
-    gs_real heat_flow_W;            /* Q_H into the block through the thermal port */
+    gs_real follower_speed_rad_s; /* backlash only */
+    gs_real follower_torque_Nm;   /* rigid only: torque the outside applies at F */
+    gs_real heat_flow_W;          /* Q_H into the block through the thermal port */
     gs_real temperature_K;
     int use_temperature_input;
 } gs_gear_ports_in;
 
 typedef struct {
-    gs_real base_torque_Nm;         /* tau_B applied by the outside at B */
-    gs_real follower_torque_Nm;     /* tau_F applied by the outside at F */
-    gs_real follower_speed_rad_s;   /* rigid: s*omega_B/g; backlash: the input */
-    gs_real mesh_loss_torque_Nm;    /* tau_mesh, follower-referred */
-    gs_real mesh_loss_power_W;      /* tau_mesh*omega_F >= 0 (passive smoothing) */
-    gs_real loss_power_W;           /* mesh + viscous + contact damping */
-    gs_real temperature_K;          /* T_th after the step (or the input) */
-    gs_real backlash_position_m;    /* x after the step */
-    gs_real contact_force_N;        /* f, positive when B pushes F in +x */
+    gs_real base_torque_Nm;       /* tau_B applied by the outside at B */
+    gs_real follower_torque_Nm;   /* tau_F applied by the outside at F */
+    gs_real follower_speed_rad_s; /* rigid: s*omega_B/g; backlash: the input */
+    gs_real mesh_loss_torque_Nm;  /* tau_mesh, follower-referred */
+    gs_real mesh_loss_power_W;    /* tau_mesh*omega_F >= 0 (passive smoothing) */
+    gs_real loss_power_W;         /* mesh + viscous + contact damping */
+    gs_real temperature_K;        /* T_th after the step (or the input) */
+    gs_real backlash_position_m;  /* x after the step */
+    gs_real contact_force_N;      /* f, positive when B pushes F in +x */
 } gs_gear_ports_out;
 
 /* Defaults of every parameter (docs/physics.md section 9). Cost: O(table). */
@@ -85,8 +85,8 @@ GS_API void gs_simple_gear_reset(const gs_simple_gear_consts *consts, gs_block_s
  * the backlash position and temperature. Cannot fail; O(1). The backlash
  * position uses explicit Euler here; the rigs integrate the contact
  * implicitly and are what stiff contact should be stepped with. */
-GS_API void gs_simple_gear_step(const gs_simple_gear_consts *consts, gs_block_state *state,
-                                gs_real dt_s, const gs_gear_ports_in *in, gs_gear_ports_out *out);
+GS_API void gs_simple_gear_step(const gs_simple_gear_consts *consts, gs_block_state *state, gs_real dt_s,
+                                const gs_gear_ports_in *in, gs_gear_ports_out *out);
 
 #ifdef __cplusplus
 }

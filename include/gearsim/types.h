@@ -36,11 +36,11 @@ extern "C" {
  * functions carry an _f32 suffix in the float build (GS_PRECISION_NAME). */
 #ifdef GS_SINGLE_PRECISION
 typedef float gs_real;
-#define GS_R(x) (x##f)
+#define GS_R(x)                 (x##f)
 #define GS_PRECISION_NAME(name) name##_f32
 #else
 typedef double gs_real;
-#define GS_R(x) (x)
+#define GS_R(x)                 (x)
 #define GS_PRECISION_NAME(name) name
 #endif
 
@@ -51,24 +51,24 @@ typedef double gs_real;
  * docs/physics.md section 9 maps to one status; gs_error names the parameter. */
 typedef enum {
     GS_OK = 0,
-    GS_E_NULL = -1,                 /* a required pointer argument is NULL */
-    GS_E_NOT_FINITE = -2,           /* a parameter is NaN or infinite */
-    GS_E_NOT_POSITIVE = -3,         /* must be > 0 */
-    GS_E_NEGATIVE = -4,             /* must be >= 0 */
-    GS_E_EFFICIENCY_RANGE = -5,     /* efficiency must lie in (0, 1] */
-    GS_E_NOMINAL_EFFICIENCY = -6,   /* nominal efficiency must lie in (0, 1) */
-    GS_E_IDLE_TORQUE_TOO_LARGE = -7,/* k < 0: g*tau_idle > tau_nom*(1/eta_nom - 1) (eq. 2.5) */
-    GS_E_OPTION = -8,               /* enum value outside its option list */
-    GS_E_TABLE_LENGTH = -9,         /* table length < 2 or > GS_TABLE_MAX */
-    GS_E_TABLE_NOT_INCREASING = -10,/* breakpoints must be strictly increasing */
-    GS_E_TABLE_SIZE_MISMATCH = -11, /* data length differs from its breakpoints */
-    GS_E_BACKLASH_POSITION = -12,   /* initial position outside [-b/2, b/2] */
-    GS_E_TRANSITION_REGION = -13,   /* smooth model: 0 < d required */
-    GS_E_STEP_SIZE = -14,           /* rig step dt must be > 0 and finite */
-    GS_E_SUBSTEPS = -15,            /* contact sub-step count out of [0, GS_MAX_SUBSTEPS] */
-    GS_E_MAGNITUDE = -16,           /* so small that its reciprocal overflows gs_real */
-    GS_E_BREAKAWAY = -17,           /* breakaway friction > 0 but below the Coulomb friction */
-    GS_E_COMBINATION = -18          /* not available with the other options (compliance:
+    GS_E_NULL = -1,                  /* a required pointer argument is NULL */
+    GS_E_NOT_FINITE = -2,            /* a parameter is NaN or infinite */
+    GS_E_NOT_POSITIVE = -3,          /* must be > 0 */
+    GS_E_NEGATIVE = -4,              /* must be >= 0 */
+    GS_E_EFFICIENCY_RANGE = -5,      /* efficiency must lie in (0, 1] */
+    GS_E_NOMINAL_EFFICIENCY = -6,    /* nominal efficiency must lie in (0, 1) */
+    GS_E_IDLE_TORQUE_TOO_LARGE = -7, /* k < 0: g*tau_idle > tau_nom*(1/eta_nom - 1) (eq. 2.5) */
+    GS_E_OPTION = -8,                /* enum value outside its option list */
+    GS_E_TABLE_LENGTH = -9,          /* table length < 2 or > GS_TABLE_MAX */
+    GS_E_TABLE_NOT_INCREASING = -10, /* breakpoints must be strictly increasing */
+    GS_E_TABLE_SIZE_MISMATCH = -11,  /* data length differs from its breakpoints */
+    GS_E_BACKLASH_POSITION = -12,    /* initial position outside [-b/2, b/2] */
+    GS_E_TRANSITION_REGION = -13,    /* smooth model: 0 < d required */
+    GS_E_STEP_SIZE = -14,            /* rig step dt must be > 0 and finite */
+    GS_E_SUBSTEPS = -15,             /* contact sub-step count out of [0, GS_MAX_SUBSTEPS] */
+    GS_E_MAGNITUDE = -16,            /* so small that its reciprocal overflows gs_real */
+    GS_E_BREAKAWAY = -17,            /* breakaway friction > 0 but below the Coulomb friction */
+    GS_E_COMBINATION = -18           /* not available with the other options (compliance:
                                        speed-driven base and rigid mesh only) */
 } gs_status;
 
@@ -167,13 +167,13 @@ typedef struct {
  * gearsim/parameters.h declares, with the member's offset and size for
  * generic access. */
 typedef struct gs_param_info_ {
-    const char *key;                      /* program name: Python keyword, model-file key, FMU
+    const char *key;       /* program name: Python keyword, model-file key, FMU
                                              variable, gs_error.parameter (in the gear rig) */
-    const char *rack_key;                 /* the name in the Rack & Pinion rig */
-    const char *member;                   /* the C member */
-    const char *gear_unit;                /* SI unit in pint syntax ("" = dimensionless or not a number) */
-    const char *rack_unit;                /* the unit in the Rack & Pinion rig */
-    const char *doc;                      /* one line: meaning and valid range */
+    const char *rack_key;  /* the name in the Rack & Pinion rig */
+    const char *member;    /* the C member */
+    const char *gear_unit; /* SI unit in pint syntax ("" = dimensionless or not a number) */
+    const char *rack_unit; /* the unit in the Rack & Pinion rig */
+    const char *doc;       /* one line: meaning and valid range */
     gs_param_kind kind;
     gs_param_flag flags;                  /* FIXED, TUNABLE or GEAR_ONLY */
     size_t offset;                        /* byte offset of the member in its struct */
@@ -185,7 +185,7 @@ typedef struct gs_param_info_ {
     const char *count2;                   /* MATRIX: the columns' count; else "" */
     const struct gs_param_info_ *members; /* GROUP: the nested struct's table, else NULL */
     size_t member_count;
-    const gs_param_options *options;      /* the option list (count 0 without options) */
+    const gs_param_options *options; /* the option list (count 0 without options) */
 } gs_param_info;
 
 /* Every entry of gs_backlash_params, in member order (GS_BACKLASH_PARAM_FIELDS). */

@@ -13,8 +13,8 @@
  */
 #include "test_common.h"
 
-static const gs_hard_stop_model hard_stop_models[3] = {
-    GS_HARD_STOP_SMOOTH, GS_HARD_STOP_FULL_UNDAMPED, GS_HARD_STOP_FULL_DAMPED};
+static const gs_hard_stop_model hard_stop_models[3] = {GS_HARD_STOP_SMOOTH, GS_HARD_STOP_FULL_UNDAMPED,
+                                                       GS_HARD_STOP_FULL_DAMPED};
 
 static double cubic_step(double xi)
 {
@@ -22,8 +22,8 @@ static double cubic_step(double xi)
 }
 
 /* Hand contact law f(x, v) of physics.md 4.3-4.5 with the no-pull clip. */
-static double contact_law(gs_hard_stop_model m, int no_pull, double K, double D, double d,
-                          double hb, double x, double v)
+static double contact_law(gs_hard_stop_model m, int no_pull, double K, double D, double d, double hb, double x,
+                          double v)
 {
     double f = 0.0;
     if (x >= hb) {
@@ -34,8 +34,7 @@ static double contact_law(gs_hard_stop_model m, int no_pull, double K, double D,
             f = K * pen + (v >= 0.0 ? D * v : 0.0);
         else
             f = K * pen + D * v;
-        if (no_pull && f < 0.0)
-            f = 0.0;
+        if (no_pull && f < 0.0) f = 0.0;
     } else if (x <= -hb) {
         const double pen = x + hb; /* <= 0 */
         if (m == GS_HARD_STOP_SMOOTH)
@@ -44,14 +43,13 @@ static double contact_law(gs_hard_stop_model m, int no_pull, double K, double D,
             f = K * pen + (v <= 0.0 ? D * v : 0.0);
         else
             f = K * pen + D * v;
-        if (no_pull && f > 0.0)
-            f = 0.0;
+        if (no_pull && f > 0.0) f = 0.0;
     }
     return f;
 }
 
-static gs_simple_gear_params backlash_gear(double g, gs_output_rotation rot, gs_hard_stop_model m,
-                                           double b, double rB, double K, double D)
+static gs_simple_gear_params backlash_gear(double g, gs_output_rotation rot, gs_hard_stop_model m, double b, double rB,
+                                           double K, double D)
 {
     gs_simple_gear_params gp = gs_simple_gear_params_default();
     gp.teeth_ratio = R(g);
@@ -124,11 +122,9 @@ static void run_block_contact(gs_hard_stop_model m, int no_pull, int lower)
             assert_true(conv != 1);
             conv = 2;
         }
-        if (!is_zero(f))
-            ++contacts;
+        if (!is_zero(f)) ++contacts;
         /* tooth torques (4.6) plus viscous terms */
-        ASSERT_NEAR(out.base_torque_Nm, rB * f + 0.01 * (double)in.base_speed_rad_s, TOL_REL,
-                    tol * rB);
+        ASSERT_NEAR(out.base_torque_Nm, rB * f + 0.01 * (double)in.base_speed_rad_s, TOL_REL, tol * rB);
         ASSERT_NEAR(out.follower_torque_Nm, -s * rF * f + 0.02 * wF, TOL_REL, tol * rF);
         x_before = x_after;
     }
@@ -149,11 +145,10 @@ static void test_block_contact_laws(void **state)
  * t_contact lies in ((k_contact - 1)*dt, k_contact*dt]. */
 static void assert_contact_step(const char *what, int k_contact, double dt, double t_contact)
 {
-    if (k_contact < 0)
-        fail_msg("%s: no contact within 400 steps (expected at %.4f s)", what, t_contact);
+    if (k_contact < 0) fail_msg("%s: no contact within 400 steps (expected at %.4f s)", what, t_contact);
     if (!(k_contact * dt >= t_contact - 1e-9 && (k_contact - 1) * dt <= t_contact + dt)) {
-        print_error("%s: contact in step %d (t = %.4f s), expected %.4f s = (b/2)/(r_B*omega_B)\n",
-                    what, k_contact, k_contact * dt, t_contact);
+        print_error("%s: contact in step %d (t = %.4f s), expected %.4f s = (b/2)/(r_B*omega_B)\n", what, k_contact,
+                    k_contact * dt, t_contact);
         fail();
     }
 }
@@ -168,8 +163,7 @@ static void test_lost_motion_gear(void **state)
     (void)state;
     for (ir = 0; ir < 2; ++ir) {
         const double g = 2.0, rB = 0.1, b = 2e-3;
-        gs_simple_gear_params gp =
-            backlash_gear(g, rots[ir], GS_HARD_STOP_FULL_DAMPED, b, rB, 1e6, 1e3);
+        gs_simple_gear_params gp = backlash_gear(g, rots[ir], GS_HARD_STOP_FULL_DAMPED, b, rB, 1e6, 1e3);
         gs_rig_params rp = gs_rig_params_default();
         test_rig rig;
         gs_rig_output out;
@@ -204,8 +198,7 @@ static void test_lost_motion_gear(void **state)
                     k_contact = k;
                 } else if (k >= 2) {
                     /* free play: x advances by v*dt, nothing moves the follower */
-                    ASSERT_NEAR((double)out.backlash_position - x_prev, v * dt, 1e-9,
-                                8.0 * GS_EPS * b);
+                    ASSERT_NEAR((double)out.backlash_position - x_prev, v * dt, 1e-9, 8.0 * GS_EPS * b);
                     ASSERT_NEAR(out.contact_energy, 0.0, 0.0, 0.0);
                     ASSERT_NEAR(out.base_port_torque, 0.0, 0.0, 0.0);
                 }
@@ -256,8 +249,7 @@ static void test_lost_motion_rack(void **state)
         for (k = 1; k <= 400; ++k) {
             gs_rig_step(&rig.c, &rig.s, &in, &out);
             assert_true(rig_output_finite(&out));
-            if (k_contact < 0 &&
-                (!is_zero((double)out.contact_force) || !is_zero((double)out.follower_speed)))
+            if (k_contact < 0 && (!is_zero((double)out.contact_force) || !is_zero((double)out.follower_speed)))
                 k_contact = k;
         }
         assert_contact_step("rack lost motion", k_contact, dt, t_contact);
@@ -305,12 +297,10 @@ static impact_result impact(gs_hard_stop_model m, double D, int no_pull, int sub
             const double scale = fabs(load) + rF * fabs(f) + 1e-6;
             ASSERT_NEAR(out.follower_port_torque, -s * rF * f, TOL_REL, 1e-12);
             /* rounding: the speed is accumulated over the sub-steps */
-            ASSERT_NEAR(JF * (w - w_prev) / dt, load - (double)out.follower_port_torque,
-                        dmax(1e-7, TOL_REL),
+            ASSERT_NEAR(JF * (w - w_prev) / dt, load - (double)out.follower_port_torque, dmax(1e-7, TOL_REL),
                         1e-9 * scale + (substeps + 8) * GS_EPS * JF * (fabs(w) + fabs(w_prev)) / dt);
         }
-        if ((x > 0.0 && f < 0.0) || (x < 0.0 && f > 0.0))
-            res.pulled = 1;
+        if ((x > 0.0 && f < 0.0) || (x < 0.0 && f > 0.0)) res.pulled = 1;
         if (k == 20) {
             w_before = w;
             ke_before = 0.5 * JF * w * w;
@@ -325,8 +315,7 @@ static impact_result impact(gs_hard_stop_model m, double D, int no_pull, int sub
         }
         if (k > 20 && is_zero(D)) {
             /* conservative contact: nothing may be created */
-            ASSERT_LE(0.5 * JF * w * w + (double)out.contact_energy, ke_before,
-                      TOL_ENERGY * ke_before + 1e-15);
+            ASSERT_LE(0.5 * JF * w * w + (double)out.contact_energy, ke_before, TOL_ENERGY * ke_before + 1e-15);
         }
         if (contact == 1 && is_zero(f) && x > -b / 2.0) {
             contact = 2; /* separated */
@@ -338,8 +327,7 @@ static impact_result impact(gs_hard_stop_model m, double D, int no_pull, int sub
         }
         w_prev = w;
     }
-    if (steps >= 200)
-        fail_msg("impact scenario did not complete (contact state %d)", contact);
+    if (steps >= 200) fail_msg("impact scenario did not complete (contact state %d)", contact);
     return res;
 }
 
@@ -349,8 +337,7 @@ static void test_rebound_conservative(void **state)
     (void)state;
     for (m = 0; m < 3; ++m) {
         const impact_result r = impact(hard_stop_models[m], 0.0, 1, 64, 200);
-        print_message("hard stop %d, D = 0: rebound/impact speed = %.6f\n", (int)hard_stop_models[m],
-                      r.ratio);
+        print_message("hard stop %d, D = 0: rebound/impact speed = %.6f\n", (int)hard_stop_models[m], r.ratio);
         assert_true(r.ratio > 0.97);
         ASSERT_LE(r.ratio, 1.0, 1e-6);
     }
@@ -422,10 +409,9 @@ static void run_stiff(gs_hard_stop_model m, int substeps, double load_amp)
             print_error("stiff contact, hard stop %d, substeps %d, load amplitude %g, step %d: "
                         "x %.9g m (prev. E %.6g J), f %.9g N, omega_B %.6g, omega_F %.6g -> %.6g, "
                         "E %.6g J\n",
-                        (int)m, substeps, load_amp, k, (double)out.backlash_position, e_prev, f,
-                        (double)out.base_speed, w_prev, w, e);
-        if (is_zero(load_amp))
-            ASSERT_LE(fabs(w), 2.0 * W / g, 1e-6 * W);
+                        (int)m, substeps, load_amp, k, (double)out.backlash_position, e_prev, f, (double)out.base_speed,
+                        w_prev, w, e);
+        if (is_zero(load_amp)) ASSERT_LE(fabs(w), 2.0 * W / g, 1e-6 * W);
         ASSERT_LE(fabs((double)out.backlash_position), b / 2.0 + 1e-5, 0.0);
         {
             const double scale = fabs(load) + rF * fabs(f) + 1e-6;
@@ -433,18 +419,15 @@ static void run_stiff(gs_hard_stop_model m, int substeps, double load_amp)
                         1e-9 * scale + (16 + 8) * GS_EPS * JF * (fabs(w) + fabs(w_prev)) / dt);
         }
         {
-            const double gross =
-                (fabs((double)out.base_port_torque * (double)out.base_speed) +
-                 fabs((double)out.follower_port_torque * w)) *
-                dt;
+            const double gross = (fabs((double)out.base_port_torque * (double)out.base_speed) +
+                                  fabs((double)out.follower_port_torque * w)) *
+                                 dt;
             /* + rounding of the stored energy: x is known to ~eps*b, so E to
              * ~|f|*eps*b (negligible in double, ~1e-11 J in float here) */
             ASSERT_LE((double)out.loss_power * dt + (e - e_prev), (double)out.port_power * dt,
-                      TOL_ENERGY * (gross + e + e_prev) + 1e-15 +
-                          4.0 * GS_EPS * b * (fabs(f) + fabs(f_prev)));
+                      TOL_ENERGY * (gross + e + e_prev) + 1e-15 + 4.0 * GS_EPS * b * (fabs(f) + fabs(f_prev)));
         }
-        if (!is_zero(f))
-            ++contacts;
+        if (!is_zero(f)) ++contacts;
         w_prev = w;
         e_prev = e;
         f_prev = f;
@@ -483,8 +466,7 @@ static void check_backward_euler_step(be_check *c, const gs_rig_output *out, int
     const int on_edge = fabs(pen) <= 4.0 * GS_EPS * c->hb;
     const int at_edge = on_edge && !is_zero(f);
     if (!near_enough(f, law, 0.0, atol) &&
-        !(c->model != GS_HARD_STOP_SMOOTH && on_edge && f * sgn(x1) >= -atol &&
-          f * sgn(x1) <= fabs(c->D * u) + atol))
+        !(c->model != GS_HARD_STOP_SMOOTH && on_edge && f * sgn(x1) >= -atol && f * sgn(x1) <= fabs(c->D * u) + atol))
         fail_msg("hard stop %d, step %d: x0 %.17g m, x1 %.17g m, u %.17g m/s: force %.17g N, "
                  "law %.17g N",
                  (int)c->model, step, c->x0, x1, u, f, law);
@@ -514,9 +496,9 @@ static void run_backward_euler_residual(gs_hard_stop_model m)
     /* reversing drive, load changing sign: sustained contact on both flanks */
     for (k = 0; k < 8000; ++k) {
         const double t = k * dt;
-        const gs_rig_input in = rig_speed_input(
-            20.0 * sin(2.0 * TEST_PI * 0.5 * t) + 4.0 * sin(2.0 * TEST_PI * 1.25 * t),
-            2.0 + 6.0 * sin(2.0 * TEST_PI * 0.25 * t + 0.3));
+        const gs_rig_input in =
+            rig_speed_input(20.0 * sin(2.0 * TEST_PI * 0.5 * t) + 4.0 * sin(2.0 * TEST_PI * 1.25 * t),
+                            2.0 + 6.0 * sin(2.0 * TEST_PI * 0.25 * t + 0.3));
         gs_rig_step(&rig.c, &rig.s, &in, &out);
         check_backward_euler_step(&c, &out, k);
     }
@@ -531,8 +513,8 @@ static void run_backward_euler_residual(gs_hard_stop_model m)
             check_backward_euler_step(&c, &out, k);
         }
     }
-    print_message("hard stop %d: %d steps in the transition region, %d beyond, %d at a jump\n",
-                  (int)m, c.transition, c.beyond, c.at_edge);
+    print_message("hard stop %d: %d steps in the transition region, %d beyond, %d at a jump\n", (int)m, c.transition,
+                  c.beyond, c.at_edge);
     /* both pieces of each law were exercised */
     assert_true(c.beyond > 100);
     if (m == GS_HARD_STOP_SMOOTH)
@@ -559,8 +541,8 @@ static void test_backward_euler_residual(void **state)
  *   load-dependent (2.6), omega_F > 0:   T_F = (T_F0 + C0)/(1 - k)
  *                          omega_F < 0:   T_F = (T_F0 - C0)/(1 + k)
  * with C0 = g*tau_idle, k = 1/eta_nom - 1 - g*tau_idle/tau_nom (2.5). */
-static double steady_block_follower_torque(gs_friction_model model, double eta, double w_b,
-                                           double *contact_force, double *base_torque)
+static double steady_block_follower_torque(gs_friction_model model, double eta, double w_b, double *contact_force,
+                                           double *base_torque)
 {
     gs_simple_gear_params g = gs_simple_gear_params_default();
     g.friction_model = model;
@@ -621,8 +603,7 @@ static void test_block_steady_contact_rigid_torques(void **state)
  * positive direction s_R = +1, D = 0): T_P = r_P*f, F0 = -s_R*f, and by hand
  *   base (pinion) drives:    F_R = eta*F0      (|F_R| = eta*|T_P|/r_P)
  *   rack drives:             F_R = F0/eta      (|T_P| = eta*r_P*|F_R|) */
-static double steady_rack_block_force(double eta, double w_p, double *contact_force,
-                                      double *pinion_torque)
+static double steady_rack_block_force(double eta, double w_p, double *contact_force, double *pinion_torque)
 {
     gs_rack_pinion_params pp = gs_rack_pinion_params_default();
     pp.friction_model = GS_FRICTION_CONSTANT_EFFICIENCY;
@@ -712,8 +693,7 @@ static void test_lock_never_engages_while_separating(void **state)
 
 /* gs_rig_get_info: the sub-step count, h*omega_n = (dt/n)*sqrt(K*(r_F^2/J_F
  * (+ r_B^2/J_B))) by hand, and the cap flag of the automatic choice. */
-static void check_info(double stiffness, double follower_inertia, int substeps_param, int expect_n,
-                       int expect_capped)
+static void check_info(double stiffness, double follower_inertia, int substeps_param, int expect_n, int expect_capped)
 {
     gs_simple_gear_params g = gs_simple_gear_params_default();
     g.backlash.enabled = 1;
@@ -761,11 +741,9 @@ typedef struct {
 } stiff_case;
 
 static const stiff_case stiff_cases[9] = {
-    {GS_HARD_STOP_SMOOTH, 0, 0.0},       {GS_HARD_STOP_SMOOTH, 1, 0.0},
-    {GS_HARD_STOP_SMOOTH, 0, 0.05},      {GS_HARD_STOP_FULL_UNDAMPED, 0, 0.0},
-    {GS_HARD_STOP_FULL_UNDAMPED, 1, 0.0}, {GS_HARD_STOP_FULL_UNDAMPED, 0, 0.05},
-    {GS_HARD_STOP_FULL_DAMPED, 0, 0.0},  {GS_HARD_STOP_FULL_DAMPED, 1, 0.0},
-    {GS_HARD_STOP_FULL_DAMPED, 0, 0.05}};
+    {GS_HARD_STOP_SMOOTH, 0, 0.0},        {GS_HARD_STOP_SMOOTH, 1, 0.0},        {GS_HARD_STOP_SMOOTH, 0, 0.05},
+    {GS_HARD_STOP_FULL_UNDAMPED, 0, 0.0}, {GS_HARD_STOP_FULL_UNDAMPED, 1, 0.0}, {GS_HARD_STOP_FULL_UNDAMPED, 0, 0.05},
+    {GS_HARD_STOP_FULL_DAMPED, 0, 0.0},   {GS_HARD_STOP_FULL_DAMPED, 1, 0.0},   {GS_HARD_STOP_FULL_DAMPED, 0, 0.05}};
 
 static void test_stiff_contact_stability(void **state)
 {
@@ -794,10 +772,12 @@ int main(void)
         {"test_stiff_smooth_auto_substeps_load", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[2]},
         {"test_stiff_full_undamped_auto_substeps", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[3]},
         {"test_stiff_full_undamped_1_substep", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[4]},
-        {"test_stiff_full_undamped_auto_substeps_load", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[5]},
+        {"test_stiff_full_undamped_auto_substeps_load", test_stiff_contact_stability, NULL, NULL,
+         (void *)&stiff_cases[5]},
         {"test_stiff_full_damped_auto_substeps", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[6]},
         {"test_stiff_full_damped_1_substep", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[7]},
-        {"test_stiff_full_damped_auto_substeps_load", test_stiff_contact_stability, NULL, NULL, (void *)&stiff_cases[8]},
+        {"test_stiff_full_damped_auto_substeps_load", test_stiff_contact_stability, NULL, NULL,
+         (void *)&stiff_cases[8]},
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -26,15 +26,15 @@
  * TOL_ENERGY relative slack of per-step energy inequalities (rounding only),
  * GS_EPS     machine epsilon of gs_real. */
 #ifdef GS_SINGLE_PRECISION
-#define TOL_REL 3e-5
-#define TOL_ACC 3e-3
+#define TOL_REL    3e-5
+#define TOL_ACC    3e-3
 #define TOL_ENERGY 1e-4
-#define GS_EPS 1.1920928955078125e-07
+#define GS_EPS     1.1920928955078125e-07
 #else
-#define TOL_REL 1e-11
-#define TOL_ACC 1e-8
+#define TOL_REL    1e-11
+#define TOL_ACC    1e-8
 #define TOL_ENERGY 1e-10
-#define GS_EPS 2.220446049250313e-16
+#define GS_EPS     2.220446049250313e-16
 #endif
 
 #define TEST_PI 3.14159265358979323846
@@ -65,33 +65,30 @@ static inline int near_enough(double got, double want, double rtol, double atol)
     return isfinite(got) && fabs(got - want) <= atol + rtol * scale;
 }
 
-static inline void assert_near_impl(double got, double want, double rtol, double atol,
-                                    const char *expr, const char *file, int line)
+static inline void assert_near_impl(double got, double want, double rtol, double atol, const char *expr,
+                                    const char *file, int line)
 {
     if (!near_enough(got, want, rtol, atol)) {
-        print_error("%s:%d: %s = %.17g, expected %.17g (diff %.3g, rtol %.3g, atol %.3g)\n",
-                    file, line, expr, got, want, fabs(got - want), rtol, atol);
+        print_error("%s:%d: %s = %.17g, expected %.17g (diff %.3g, rtol %.3g, atol %.3g)\n", file, line, expr, got,
+                    want, fabs(got - want), rtol, atol);
         _fail(file, line);
     }
 }
 
 #define ASSERT_NEAR(got, want, rtol, atol) \
-    assert_near_impl((double)(got), (double)(want), (double)(rtol), (double)(atol), #got, __FILE__, \
-                     __LINE__)
+    assert_near_impl((double)(got), (double)(want), (double)(rtol), (double)(atol), #got, __FILE__, __LINE__)
 
 /* Asserts a <= b + slack, printing both sides on failure. */
-static inline void assert_le_impl(double a, double b, double slack, const char *ea, const char *eb,
-                                  const char *file, int line)
+static inline void assert_le_impl(double a, double b, double slack, const char *ea, const char *eb, const char *file,
+                                  int line)
 {
     if (!(a <= b + slack)) {
-        print_error("%s:%d: expected %s <= %s (+%.3g): %.17g > %.17g\n", file, line, ea, eb, slack,
-                    a, b);
+        print_error("%s:%d: expected %s <= %s (+%.3g): %.17g > %.17g\n", file, line, ea, eb, slack, a, b);
         _fail(file, line);
     }
 }
 
-#define ASSERT_LE(a, b, slack) \
-    assert_le_impl((double)(a), (double)(b), (double)(slack), #a, #b, __FILE__, __LINE__)
+#define ASSERT_LE(a, b, slack) assert_le_impl((double)(a), (double)(b), (double)(slack), #a, #b, __FILE__, __LINE__)
 
 /* ---- Deterministic PRNG (xorshift64), independent of the C library. */
 typedef struct {
@@ -142,25 +139,22 @@ static inline uint64_t fnv1a64(uint64_t h, const void *data, size_t n)
 #define FNV1A64_OFFSET 0xCBF29CE484222325ULL
 
 /* ---- Initialisation helpers: fail the test with the reported parameter. */
-static inline void report_init_failure(const char *what, gs_status st, const gs_error *err,
-                                       const char *file, int line)
+static inline void report_init_failure(const char *what, gs_status st, const gs_error *err, const char *file, int line)
 {
-    print_error("%s:%d: %s failed: status %d (%s), parameter '%s', message '%s'\n", file, line,
-                what, (int)st, gs_status_str(st), err->parameter ? err->parameter : "(null)",
-                err->message ? err->message : "(null)");
+    print_error("%s:%d: %s failed: status %d (%s), parameter '%s', message '%s'\n", file, line, what, (int)st,
+                gs_status_str(st), err->parameter ? err->parameter : "(null)", err->message ? err->message : "(null)");
     _fail(file, line);
 }
 
 /* Calls an init function (its gs_error * last) and fails the test, naming
  * the reported parameter, unless it returns GS_OK. */
-#define INIT_OK(init, ...)                                                \
-    do {                                                                  \
-        gs_error err_;                                                    \
-        gs_status st_;                                                    \
-        memset(&err_, 0, sizeof err_);                                    \
-        st_ = init(__VA_ARGS__, &err_);                                   \
-        if (st_ != GS_OK)                                                 \
-            report_init_failure(#init, st_, &err_, __FILE__, __LINE__);   \
+#define INIT_OK(init, ...)                                                            \
+    do {                                                                              \
+        gs_error err_;                                                                \
+        gs_status st_;                                                                \
+        memset(&err_, 0, sizeof err_);                                                \
+        st_ = init(__VA_ARGS__, &err_);                                               \
+        if (st_ != GS_OK) report_init_failure(#init, st_, &err_, __FILE__, __LINE__); \
     } while (0)
 
 /* A rig or block in the tests: the constants init derives (read-only
@@ -184,8 +178,8 @@ typedef struct {
 /* Each takes a pointer to a test_rig / test_gear / test_rack. */
 #define INIT_GEAR_RIG(rig, gp, rp) INIT_OK(gs_rig_init_gear, &(rig)->c, &(rig)->s, (gp), (rp))
 #define INIT_RACK_RIG(rig, pp, rp) INIT_OK(gs_rig_init_rack, &(rig)->c, &(rig)->s, (pp), (rp))
-#define INIT_GEAR(gear, gp) INIT_OK(gs_simple_gear_init, &(gear)->c, &(gear)->s, (gp))
-#define INIT_RACK(rp_, pp) INIT_OK(gs_rack_pinion_init, &(rp_)->c, &(rp_)->s, (pp))
+#define INIT_GEAR(gear, gp)        INIT_OK(gs_simple_gear_init, &(gear)->c, &(gear)->s, (gp))
+#define INIT_RACK(rp_, pp)         INIT_OK(gs_rack_pinion_init, &(rp_)->c, &(rp_)->s, (pp))
 
 static inline gs_rig_input rig_input_blank(void)
 {
@@ -229,15 +223,13 @@ static inline int rig_output_finite(const gs_rig_output *o)
     const gs_real *v = (const gs_real *)(const void *)o;
     int i;
     for (i = 0; i < GS_RIG_OUTPUT_FIELDS; ++i) {
-        if (!isfinite((double)v[i]))
-            return 0;
+        if (!isfinite((double)v[i])) return 0;
     }
     return 1;
 }
 
 /* The n outputs of a and b are the same bits (determinism checks). */
-static inline void assert_outputs_identical(const gs_rig_output *a, const gs_rig_output *b, size_t n,
-                                            const char *what)
+static inline void assert_outputs_identical(const gs_rig_output *a, const gs_rig_output *b, size_t n, const char *what)
 {
     size_t k;
     for (k = 0; k < n; ++k) {

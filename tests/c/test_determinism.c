@@ -92,8 +92,7 @@ static void script_inputs(int torque_driven)
         const double t = k * 1e-3;
         double base = 8.0 * sin(2.0 * TEST_PI * 1.5 * t) + (k > 1500 && k < 1800 ? -6.0 : 0.0);
         double load = 0.6 * sin(2.0 * TEST_PI * 0.4 * t) + (k > 2200 ? 0.8 : 0.0);
-        if (k > 1000 && k < 1200)
-            base = 0.0;
+        if (k > 1000 && k < 1200) base = 0.0;
         base += rng_range(&rng, -0.05, 0.05);
         if (torque_driven) {
             base = 0.3 * sin(2.0 * TEST_PI * 1.1 * t) + rng_range(&rng, -0.02, 0.02);
@@ -213,14 +212,11 @@ static uint64_t hash_outputs(const gs_rig_output *o, size_t n)
     uint64_t h = FNV1A64_OFFSET;
     size_t k;
     for (k = 0; k < n; ++k) {
-        const gs_real v[15] = {o[k].base_torque,          o[k].base_speed,
-                               o[k].base_angle,           o[k].follower_speed,
-                               o[k].follower_position,    o[k].base_port_torque,
-                               o[k].follower_port_torque, o[k].mesh_loss_power,
-                               o[k].loss_power,           o[k].port_power,
-                               o[k].contact_energy,       o[k].temperature,
-                               o[k].backlash_position,    o[k].contact_force,
-                               o[k].follower_acceleration};
+        const gs_real v[15] = {o[k].base_torque,          o[k].base_speed,        o[k].base_angle,
+                               o[k].follower_speed,       o[k].follower_position, o[k].base_port_torque,
+                               o[k].follower_port_torque, o[k].mesh_loss_power,   o[k].loss_power,
+                               o[k].port_power,           o[k].contact_energy,    o[k].temperature,
+                               o[k].backlash_position,    o[k].contact_force,     o[k].follower_acceleration};
         h = fnv1a64(h, v, sizeof v);
     }
     return h;

@@ -15,7 +15,7 @@
  */
 #include "test_common.h"
 
-#define RIGID_STEPS 3000
+#define RIGID_STEPS    3000
 #define BACKLASH_STEPS 4000
 
 static void set_2d_table(gs_simple_gear_params *gp)
@@ -34,8 +34,7 @@ static void set_2d_table(gs_simple_gear_params *gp)
     }
 }
 
-static gs_simple_gear_params lossy_gear(gs_friction_model fm, gs_output_rotation rot,
-                                        gs_loss_smoothing sm, double g)
+static gs_simple_gear_params lossy_gear(gs_friction_model fm, gs_output_rotation rot, gs_loss_smoothing sm, double g)
 {
     gs_simple_gear_params gp = gs_simple_gear_params_default();
     gp.teeth_ratio = R(g);
@@ -51,8 +50,7 @@ static gs_simple_gear_params lossy_gear(gs_friction_model fm, gs_output_rotation
     gp.viscous_coefficients[0] = R(0.01);
     gp.viscous_coefficients[1] = R(0.02);
     gp.thermal_mass_J_K = R(5.0);
-    if (fm == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY)
-        set_2d_table(&gp);
+    if (fm == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY) set_2d_table(&gp);
     return gp;
 }
 
@@ -93,8 +91,7 @@ static void walk_next(test_rng *rng, walk *w, double base_max, double load_max, 
 /* The input of a speed- or torque-driven rig from the walk's values. */
 static gs_rig_input walk_input(gs_base_drive drive, const walk *w)
 {
-    return drive == GS_BASE_SPEED_DRIVEN ? rig_speed_input(w->base, w->load)
-                                         : rig_torque_input(w->base, w->load);
+    return drive == GS_BASE_SPEED_DRIVEN ? rig_speed_input(w->base, w->load) : rig_torque_input(w->base, w->load);
 }
 
 static void check_rigid_step(const gs_rig_output *o, gs_base_drive drive, int passive)
@@ -117,8 +114,8 @@ static void check_rigid_step(const gs_rig_output *o, gs_base_drive drive, int pa
     ASSERT_NEAR(o->contact_energy, 0.0, 0.0, 0.0); /* rigid: nothing stored */
 }
 
-static void run_random_rigid_gear(gs_friction_model fm, gs_output_rotation rot,
-                                  gs_loss_smoothing sm, gs_base_drive drive, uint64_t seed)
+static void run_random_rigid_gear(gs_friction_model fm, gs_output_rotation rot, gs_loss_smoothing sm,
+                                  gs_base_drive drive, uint64_t seed)
 {
     test_rng rng = rng_seed(seed);
     const double g = rng_range(&rng, 0.4, 4.0);
@@ -144,19 +141,15 @@ static void run_random_rigid_gear(gs_friction_model fm, gs_output_rotation rot,
 
 /* Every gear friction model with passive smoothing, both rotation senses;
  * seeds seed_same + i and seed_opposite + i for model i. */
-static void run_random_rigid_gear_models(gs_base_drive drive, uint64_t seed_same,
-                                         uint64_t seed_opposite)
+static void run_random_rigid_gear_models(gs_base_drive drive, uint64_t seed_same, uint64_t seed_opposite)
 {
     static const gs_friction_model fms[5] = {
         GS_FRICTION_NONE, GS_FRICTION_CONSTANT_EFFICIENCY, GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY,
-        GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY,
-        GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY};
+        GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY, GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY};
     int i;
     for (i = 0; i < 5; ++i) {
-        run_random_rigid_gear(fms[i], GS_ROTATES_SAME, GS_SMOOTHING_PASSIVE, drive,
-                              seed_same + (uint64_t)i);
-        run_random_rigid_gear(fms[i], GS_ROTATES_OPPOSITE, GS_SMOOTHING_PASSIVE, drive,
-                              seed_opposite + (uint64_t)i);
+        run_random_rigid_gear(fms[i], GS_ROTATES_SAME, GS_SMOOTHING_PASSIVE, drive, seed_same + (uint64_t)i);
+        run_random_rigid_gear(fms[i], GS_ROTATES_OPPOSITE, GS_SMOOTHING_PASSIVE, drive, seed_opposite + (uint64_t)i);
     }
 }
 
@@ -165,8 +158,8 @@ static void test_random_rigid_gear_speed_driven(void **state)
     (void)state;
     run_random_rigid_gear_models(GS_BASE_SPEED_DRIVEN, 1000u, 2000u);
     /* Simscape smoothing: the balance still holds (loss may dip below 0) */
-    run_random_rigid_gear(GS_FRICTION_CONSTANT_EFFICIENCY, GS_ROTATES_OPPOSITE,
-                          GS_SMOOTHING_SIMSCAPE, GS_BASE_SPEED_DRIVEN, 3001u);
+    run_random_rigid_gear(GS_FRICTION_CONSTANT_EFFICIENCY, GS_ROTATES_OPPOSITE, GS_SMOOTHING_SIMSCAPE,
+                          GS_BASE_SPEED_DRIVEN, 3001u);
 }
 
 static void test_random_rigid_gear_torque_driven(void **state)
@@ -175,8 +168,7 @@ static void test_random_rigid_gear_torque_driven(void **state)
     run_random_rigid_gear_models(GS_BASE_TORQUE_DRIVEN, 4000u, 5000u);
 }
 
-static void run_random_rigid_rack(gs_friction_model fm, gs_rack_direction dir, gs_base_drive drive,
-                                  uint64_t seed)
+static void run_random_rigid_rack(gs_friction_model fm, gs_rack_direction dir, gs_base_drive drive, uint64_t seed)
 {
     test_rng rng = rng_seed(seed);
     gs_rack_pinion_params pp = gs_rack_pinion_params_default();
@@ -194,8 +186,8 @@ static void run_random_rigid_rack(gs_friction_model fm, gs_rack_direction dir, g
     pp.pinion_viscous_coefficient = R(0.01);
     pp.rack_viscous_coefficient = R(2.0);
     pp.thermal_mass_J_K = R(5.0);
-    rp.driven_inertia = R(1.5);             /* kg */
-    rp.load_coulomb_friction = R(3.0);      /* N */
+    rp.driven_inertia = R(1.5);        /* kg */
+    rp.load_coulomb_friction = R(3.0); /* N */
     rp.load_coulomb_speed_threshold = R(0.01);
     rp.load_offset = R(-4.0);
     INIT_RACK_RIG(&rig, &pp, &rp);
@@ -224,8 +216,8 @@ static void test_random_rigid_rack(void **state)
 }
 
 /* ---- Backlash: per-step dissipation inequality. */
-static void check_backlash_step(const gs_rig_output *o, double e_prev, double f_prev, double dt,
-                                int step, const char *label)
+static void check_backlash_step(const gs_rig_output *o, double e_prev, double f_prev, double dt, int step,
+                                const char *label)
 {
     const double e = (double)o->contact_energy;
     const double gross = (fabs((double)o->base_port_torque * (double)o->base_speed) +
@@ -233,29 +225,27 @@ static void check_backlash_step(const gs_rig_output *o, double e_prev, double f_
                          dt;
     /* rounding slack: the energies' own scale, and the stored energy's
      * sensitivity to the rounding of x (~|f|*eps*b, b = 1e-3 m here) */
-    const double tol = TOL_ENERGY * (gross + fabs((double)o->loss_power) * dt + e + e_prev) +
-                       1e-15 +
+    const double tol = TOL_ENERGY * (gross + fabs((double)o->loss_power) * dt + e + e_prev) + 1e-15 +
                        4.0 * GS_EPS * 1e-3 * (fabs((double)o->contact_force) + fabs(f_prev));
     const double lhs = (double)o->loss_power * dt + (e - e_prev);
     const double rhs = (double)o->port_power * dt;
     /* the contact's share of the loss, (f - f_spring)*u, comes from an
      * impulse balance: allow rounding relative to the power through the ports */
     const double loss_floor = -TOL_ENERGY * gross / dt;
-    if (!rig_output_finite(o) || !((double)o->loss_power >= loss_floor) ||
-        !((double)o->mesh_loss_power >= 0.0) || !(e >= 0.0) || !(lhs <= rhs + tol)) {
+    if (!rig_output_finite(o) || !((double)o->loss_power >= loss_floor) || !((double)o->mesh_loss_power >= 0.0) ||
+        !(e >= 0.0) || !(lhs <= rhs + tol)) {
         print_error("%s, step %d: loss %.9g W, mesh loss %.9g W, port %.9g W, E %.9g -> %.9g J, "
                     "loss*dt + dE - port*dt = %.3g J (tol %.3g), x = %.9g m, f = %.9g N, "
                     "omega_B %.6g, omega_F %.6g\n",
-                    label, step, (double)o->loss_power, (double)o->mesh_loss_power,
-                    (double)o->port_power, e_prev, e, lhs - rhs, tol,
-                    (double)o->backlash_position, (double)o->contact_force,
-                    (double)o->base_speed, (double)o->follower_speed);
+                    label, step, (double)o->loss_power, (double)o->mesh_loss_power, (double)o->port_power, e_prev, e,
+                    lhs - rhs, tol, (double)o->backlash_position, (double)o->contact_force, (double)o->base_speed,
+                    (double)o->follower_speed);
         fail();
     }
 }
 
-static const gs_hard_stop_model hard_stop_models[3] = {
-    GS_HARD_STOP_SMOOTH, GS_HARD_STOP_FULL_UNDAMPED, GS_HARD_STOP_FULL_DAMPED};
+static const gs_hard_stop_model hard_stop_models[3] = {GS_HARD_STOP_SMOOTH, GS_HARD_STOP_FULL_UNDAMPED,
+                                                       GS_HARD_STOP_FULL_DAMPED};
 
 typedef struct {
     gs_hard_stop_model model;
@@ -278,10 +268,9 @@ static void run_random_backlash(backlash_case c, uint64_t seed)
     double e_prev, f_prev = 0.0, dt, max_e = 0.0;
     int k;
     char label[160];
-    snprintf(label, sizeof label,
-             "%s rig, hard stop %d, D %g, no_pull %d, substeps %d, friction %d, %s-driven",
-             c.rack ? "rack" : "gear", (int)c.model, c.damping, c.no_pull, c.substeps,
-             (int)c.friction, c.drive == GS_BASE_SPEED_DRIVEN ? "speed" : "torque");
+    snprintf(label, sizeof label, "%s rig, hard stop %d, D %g, no_pull %d, substeps %d, friction %d, %s-driven",
+             c.rack ? "rack" : "gear", (int)c.model, c.damping, c.no_pull, c.substeps, (int)c.friction,
+             c.drive == GS_BASE_SPEED_DRIVEN ? "speed" : "torque");
     bl = gs_simple_gear_params_default().backlash;
     bl.enabled = 1;
     bl.hard_stop_model = c.model;
@@ -310,8 +299,7 @@ static void run_random_backlash(backlash_case c, uint64_t seed)
         rp.driven_inertia = R(2.0);
         INIT_RACK_RIG(&rig, &pp, &rp);
     } else {
-        gs_simple_gear_params gp = lossy_gear(c.friction, GS_ROTATES_OPPOSITE,
-                                              GS_SMOOTHING_PASSIVE, 2.0);
+        gs_simple_gear_params gp = lossy_gear(c.friction, GS_ROTATES_OPPOSITE, GS_SMOOTHING_PASSIVE, 2.0);
         /* thresholds inside the explicit-friction stability bounds of
          * docs/model.md (p_th > 2*L*T_F^2*h/J_F, omega_th > 2*tau_C*h/J_F
          * for tooth torques of tens of N*m) */
@@ -324,8 +312,7 @@ static void run_random_backlash(backlash_case c, uint64_t seed)
     e_prev = 0.0; /* the initial position is inside the gap: nothing stored */
     for (k = 0; k < BACKLASH_STEPS; ++k) {
         gs_rig_input in;
-        walk_next(&rng, &w, c.drive == GS_BASE_SPEED_DRIVEN ? 20.0 : 0.8,
-                  c.rack ? 40.0 : 2.0, 80);
+        walk_next(&rng, &w, c.drive == GS_BASE_SPEED_DRIVEN ? 20.0 : 0.8, c.rack ? 40.0 : 2.0, 80);
         in = walk_input(c.drive, &w);
         gs_rig_step(&rig.c, &rig.s, &in, &out);
         check_backlash_step(&out, e_prev, f_prev, dt, k, label);
@@ -346,7 +333,7 @@ static void test_random_backlash_energy_contact(void **state)
         double damping;
         int no_pull, substeps;
         gs_base_drive drive;
-    } variants[6] = {{0.0, 1, 0, GS_BASE_SPEED_DRIVEN},   {300.0, 1, 0, GS_BASE_SPEED_DRIVEN},
+    } variants[6] = {{0.0, 1, 0, GS_BASE_SPEED_DRIVEN},    {300.0, 1, 0, GS_BASE_SPEED_DRIVEN},
                      {300.0, 1, 0, GS_BASE_TORQUE_DRIVEN}, {300.0, 0, 0, GS_BASE_SPEED_DRIVEN},
                      {300.0, 1, 1, GS_BASE_SPEED_DRIVEN},  {0.0, 1, 8, GS_BASE_SPEED_DRIVEN}};
     uint64_t seed = 9000u;

@@ -57,8 +57,7 @@ static gear_expect expect_gear(gear_law law, double TF, double wF, double wB, do
 
 /* One operating point through the block and the rig.
  * temp_K > 0: the temperature-dependent models read it as an input. */
-static void check_gear_point(const gs_simple_gear_params *gp, double wB, double tauF, double temp_K,
-                             gear_expect e)
+static void check_gear_point(const gs_simple_gear_params *gp, double wB, double tauF, double temp_K, gear_expect e)
 {
     const double g = (double)gp->teeth_ratio;
     const double s = gear_sign(gp->output_shaft_rotates);
@@ -95,8 +94,7 @@ static void check_gear_point(const gs_simple_gear_params *gp, double wB, double 
     rp.temperature_source = temp_K > 0.0 ? GS_TEMPERATURE_FROM_INPUT : GS_TEMPERATURE_FROM_MODEL;
     INIT_GEAR_RIG(&rig, gp, &rp);
     ri = rig_speed_input(wB, tauF);
-    if (temp_K > 0.0)
-        ri.measured_temperature = R(temp_K);
+    if (temp_K > 0.0) ri.measured_temperature = R(temp_K);
     for (k = 0; k < 5; ++k)
         gs_rig_step(&rig.c, &rig.s, &ri, &ro);
     ASSERT_NEAR(ro.follower_speed, wF, TOL_REL, 0.0);
@@ -106,15 +104,13 @@ static void check_gear_point(const gs_simple_gear_params *gp, double wB, double 
     ASSERT_NEAR(ro.mesh_loss_power, e.mesh_power, TOL_REL, 1e-12);
     ASSERT_NEAR(ro.loss_power, loss, TOL_REL, 1e-12);
     ASSERT_NEAR(ro.port_power, loss, 0.0, ptol + 1e-12);
-    if (temp_K > 0.0)
-        ASSERT_NEAR(ro.temperature, temp_K, TOL_REL, 0.0);
+    if (temp_K > 0.0) ASSERT_NEAR(ro.temperature, temp_K, TOL_REL, 0.0);
 }
 
 /* Both output_shaft_rotates options, both speed signs, both power-flow
  * directions, at |omega_F| = wF_mag and |T_F| = TF_mag. law_of(|T_F|) gives
  * the hand law. */
-static void sweep_gear(gs_simple_gear_params gp, double wF_mag, double TF_mag, double temp_K,
-                       gear_law law)
+static void sweep_gear(gs_simple_gear_params gp, double wF_mag, double TF_mag, double temp_K, gear_law law)
 {
     const gs_output_rotation rots[2] = {GS_ROTATES_SAME, GS_ROTATES_OPPOSITE};
     int ir, iw, flow;
@@ -178,8 +174,7 @@ static void test_constant_efficiency(void **state)
 static double k_of(const gs_simple_gear_params *gp)
 {
     return 1.0 / (double)gp->efficiency_nominal - 1.0 -
-           (double)gp->teeth_ratio * (double)gp->idle_torque_Nm /
-               (double)gp->nominal_output_torque_Nm;
+           (double)gp->teeth_ratio * (double)gp->idle_torque_Nm / (double)gp->nominal_output_torque_Nm;
 }
 
 static void test_load_dependent_efficiency(void **state)
@@ -343,8 +338,7 @@ static void test_smoothing_inside_threshold(void **state)
                 tm = TF * t * (t >= 0.0 ? Lfd : Lbd);
             e.TB = s * (tm - TF) / g;
             e.mesh_power = tm * wF;
-            if (!smoothing)
-                assert_true(e.mesh_power >= 0.0);
+            if (!smoothing) assert_true(e.mesh_power >= 0.0);
             check_gear_point(&gp, wB, TF, 0.0, e);
         }
     }
@@ -410,8 +404,7 @@ static void test_viscous_terms(void **state)
 /* ---- Rack & Pinion: T_P = tau_P - mu_P*omega_P, Tn = F_R - mu_R*v_R,
  * pinion drives (Tn*v_R < 0): |Tn| = eta*|T_P|/r_P,
  * rack drives:                |T_P| = eta*r_P*|Tn|. */
-static void check_rack_point(const gs_rack_pinion_params *pp, double wP, double FR, double temp_K,
-                             double eta)
+static void check_rack_point(const gs_rack_pinion_params *pp, double wP, double FR, double temp_K, double eta)
 {
     const double r = gs_rack_pinion_radius(pp);
     const double sR = rack_sign(pp->rack_directionality);
@@ -451,8 +444,7 @@ static void check_rack_point(const gs_rack_pinion_params *pp, double wP, double 
     rp.temperature_source = temp_K > 0.0 ? GS_TEMPERATURE_FROM_INPUT : GS_TEMPERATURE_FROM_MODEL;
     INIT_RACK_RIG(&rig, pp, &rp);
     ri = rig_speed_input(wP, FR);
-    if (temp_K > 0.0)
-        ri.measured_temperature = R(temp_K);
+    if (temp_K > 0.0) ri.measured_temperature = R(temp_K);
     for (k = 0; k < 5; ++k)
         gs_rig_step(&rig.c, &rig.s, &ri, &ro);
     ASSERT_NEAR(ro.follower_speed, v, TOL_REL, 0.0);
@@ -476,8 +468,7 @@ static void sweep_rack(gs_rack_pinion_params pp, double temp_K, double eta)
                 wP = (iw == 0 ? 7.5 : -7.5);
                 v = rack_sign(dirs[id]) * r * wP;
                 Tn = (flow == 0 ? -1.0 : 1.0) * sgn(v) * 50.0; /* flow 0: pinion drives */
-                check_rack_point(&pp, wP, Tn + (double)pp.rack_viscous_coefficient * v, temp_K,
-                                 eta);
+                check_rack_point(&pp, wP, Tn + (double)pp.rack_viscous_coefficient * v, temp_K, eta);
             }
         }
     }

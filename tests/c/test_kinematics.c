@@ -50,11 +50,9 @@ static void test_gear_rig_speed_driven_signs(void **state)
                 ASSERT_NEAR(out.base_speed, wB, TOL_REL, 0.0);
                 ASSERT_NEAR(out.follower_speed, s * (double)in.base_speed / g, TOL_REL, 0.0);
                 /* rigid mesh from a common zero: theta_F = s*theta_B/g */
-                ASSERT_NEAR(out.follower_position, s * (double)out.base_angle / g, TOL_REL,
-                            1e-12);
+                ASSERT_NEAR(out.follower_position, s * (double)out.base_angle / g, TOL_REL, 1e-12);
                 if (k >= 2) {
-                    ASSERT_NEAR((double)out.base_angle - (double)prev.base_angle, wB * dt,
-                                TOL_ACC, 0.0);
+                    ASSERT_NEAR((double)out.base_angle - (double)prev.base_angle, wB * dt, TOL_ACC, 0.0);
                     ASSERT_NEAR(out.follower_acceleration, 0.0, 0.0, 1e-9);
                     ASSERT_NEAR(out.follower_port_torque, load, TOL_REL, 0.0);
                     ASSERT_NEAR(out.base_port_torque, -s * load / g, TOL_REL, 0.0);
@@ -67,8 +65,7 @@ static void test_gear_rig_speed_driven_signs(void **state)
                 prev = out;
             }
             /* the drive supplies power iff the load opposes the follower */
-            assert_true(((double)out.base_torque * wB > 0.0) ==
-                        (load * (double)out.follower_speed < 0.0));
+            assert_true(((double)out.base_torque * wB > 0.0) == (load * (double)out.follower_speed < 0.0));
         }
     }
 }
@@ -172,8 +169,7 @@ static void test_tooth_parameterization(void **state)
         for (k = 1; k <= 4; ++k)
             gs_rig_step(&rig.c, &rig.s, &in, &out);
         ASSERT_NEAR(out.follower_speed, rack_sign(pp.rack_directionality) * r * 6.0, TOL_REL, 0.0);
-        ASSERT_NEAR(out.base_port_torque, -rack_sign(pp.rack_directionality) * r * -15.0,
-                    TOL_REL, 0.0);
+        ASSERT_NEAR(out.base_port_torque, -rack_sign(pp.rack_directionality) * r * -15.0, TOL_REL, 0.0);
     }
     {
         /* seed defaults: 20 teeth x 5 mm = 15.915 mm */
@@ -221,8 +217,7 @@ static void test_gear_rig_inertia_and_load_terms(void **state)
                 const double wF = s * wB / g;
                 const double alphaF = s * alphaB / g;
                 const double tauF = load + (double)rp.load_offset -
-                                    (double)rp.load_coulomb_friction * tanh(4.0 * wF / wth) -
-                                    JF * alphaF;
+                                    (double)rp.load_coulomb_friction * tanh(4.0 * wF / wth) - JF * alphaF;
                 const double tauB = -s * tauF / g;
                 ASSERT_NEAR(out.follower_acceleration, alphaF, 1e-9, 8.0 * GS_EPS * 3.0 / dt);
                 ASSERT_NEAR(out.follower_port_torque, tauF, 1e-9, 8.0 * GS_EPS * 3.0 / dt);
@@ -268,14 +263,12 @@ static void test_accel_filter_time_constant(void **state)
         /* a low-pass never overshoots a step */
         assert_true(ratio > 0.0);
         ASSERT_LE(ratio, 1.0, tol);
-        if (ramp == 1)
-            assert_true(ratio < 0.5); /* filtered, not the raw difference */
+        if (ramp == 1) assert_true(ratio < 0.5); /* filtered, not the raw difference */
         if (ramp == (int)(tau / dt + 0.5)) {
             assert_true(ratio > 0.58);
             assert_true(ratio < 0.68);
         }
-        if (ramp == 400)
-            ASSERT_NEAR(ratio, 1.0, tol, 0.0);
+        if (ramp == 400) ASSERT_NEAR(ratio, 1.0, tol, 0.0);
     }
 }
 
@@ -283,8 +276,8 @@ static void test_accel_filter_time_constant(void **state)
  * with constant efficiency the follower inertia is divided by eta when the
  * base drives (accelerating) and multiplied by eta when the follower drives
  * (decelerating, its kinetic energy flows back to the base). */
-static void run_torque_driven(gs_output_rotation rot, gs_friction_model fm, double eta, double w0,
-                              double motor, double expected_alpha)
+static void run_torque_driven(gs_output_rotation rot, gs_friction_model fm, double eta, double w0, double motor,
+                              double expected_alpha)
 {
     gs_simple_gear_params gp = ideal_gear(2.0, rot);
     gs_rig_params rp = gs_rig_params_default();
@@ -314,10 +307,8 @@ static void run_torque_driven(gs_output_rotation rot, gs_friction_model fm, doub
         if (k >= 3) {
             ASSERT_NEAR(alpha, expected_alpha, 1e-7, 16.0 * GS_EPS * fabs(wB) / dt);
             /* Newton on the base shaft: J_B*alpha_B = T - tau_B */
-            ASSERT_NEAR(out.base_port_torque, motor - JB * alpha, 1e-7,
-                        16.0 * GS_EPS * fabs(wB) / dt * JB);
-            ASSERT_NEAR(out.follower_acceleration, s * alpha / 2.0, 1e-7,
-                        16.0 * GS_EPS * fabs(wB) / dt);
+            ASSERT_NEAR(out.base_port_torque, motor - JB * alpha, 1e-7, 16.0 * GS_EPS * fabs(wB) / dt * JB);
+            ASSERT_NEAR(out.follower_acceleration, s * alpha / 2.0, 1e-7, 16.0 * GS_EPS * fabs(wB) / dt);
         }
         prev_w = wB;
     }
@@ -329,11 +320,9 @@ static void test_torque_driven_acceleration(void **state)
     (void)state;
     /* ideal, from rest and from a speed, both rotation senses */
     run_torque_driven(GS_ROTATES_SAME, GS_FRICTION_NONE, 1.0, 0.0, 0.6, 0.6 / (JB + JF / (g * g)));
-    run_torque_driven(GS_ROTATES_OPPOSITE, GS_FRICTION_NONE, 1.0, 3.0, -0.6,
-                      -0.6 / (JB + JF / (g * g)));
+    run_torque_driven(GS_ROTATES_OPPOSITE, GS_FRICTION_NONE, 1.0, 3.0, -0.6, -0.6 / (JB + JF / (g * g)));
     /* base drives the follower inertia up: J_F/(eta*g^2) */
-    run_torque_driven(GS_ROTATES_SAME, GS_FRICTION_CONSTANT_EFFICIENCY, eta, 5.0, 1.0,
-                      1.0 / (JB + JF / (eta * g * g)));
+    run_torque_driven(GS_ROTATES_SAME, GS_FRICTION_CONSTANT_EFFICIENCY, eta, 5.0, 1.0, 1.0 / (JB + JF / (eta * g * g)));
     run_torque_driven(GS_ROTATES_OPPOSITE, GS_FRICTION_CONSTANT_EFFICIENCY, eta, -5.0, -1.0,
                       -1.0 / (JB + JF / (eta * g * g)));
     /* braking: the follower's kinetic energy drives the base: eta*J_F/g^2 */

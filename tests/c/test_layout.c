@@ -14,7 +14,7 @@
  */
 #include "test_common.h"
 
-#define N_WARM 500
+#define N_WARM   500
 #define N_RECORD 300
 #define N_SHARED 2000
 
@@ -136,8 +136,7 @@ static void test_snapshot_is_state_copy(void **state)
     /* the recorded stretch is not trivial: the teeth touch in it */
     for (k = 0; k < N_RECORD; ++k) {
         assert_true(rig_output_finite(&out_a[k]));
-        if (!is_zero((double)out_a[k].contact_force))
-            ++contacts;
+        if (!is_zero((double)out_a[k].contact_force)) ++contacts;
     }
     assert_true(contacts > 0);
 }
@@ -166,10 +165,10 @@ static void test_shared_consts(void **state)
             gs_rig_step(&r1.c, &r1.s, &inputs_a[k], &out_c[k]);
             gs_rig_step(&r2.c, &r2.s, &inputs_b[k], &out_d[k]);
         }
-        assert_outputs_identical(out_a, out_c, N_SHARED, rack ? "rack, shared consts, state 1"
-                                                              : "gear, shared consts, state 1");
-        assert_outputs_identical(out_b, out_d, N_SHARED, rack ? "rack, shared consts, state 2"
-                                                              : "gear, shared consts, state 2");
+        assert_outputs_identical(out_a, out_c, N_SHARED,
+                                 rack ? "rack, shared consts, state 1" : "gear, shared consts, state 1");
+        assert_outputs_identical(out_b, out_d, N_SHARED,
+                                 rack ? "rack, shared consts, state 2" : "gear, shared consts, state 2");
         /* the two states did run apart */
         assert_true(memcmp(&out_a[N_SHARED - 1], &out_b[N_SHARED - 1], sizeof out_a[0]) != 0);
     }
@@ -202,8 +201,8 @@ typedef struct {
 } expected_field;
 
 /* 1 for a member declared int, 0 for gs_real (as the lists spell the type) */
-#define EXP_IS_INT_(type) ((int)(sizeof(#type) == sizeof("int")))
-#define EXP_IN_(type, name, gu, ru, doc) {#name, offsetof(gs_rig_input, name), EXP_IS_INT_(type)},
+#define EXP_IS_INT_(type)                 ((int)(sizeof(#type) == sizeof("int")))
+#define EXP_IN_(type, name, gu, ru, doc)  {#name, offsetof(gs_rig_input, name), EXP_IS_INT_(type)},
 #define EXP_OUT_(type, name, gu, ru, doc) {#name, offsetof(gs_rig_output, name), EXP_IS_INT_(type)},
 #define EXP_BLOCK_(type, name, gu, ru, doc) \
     {#name, offsetof(gs_rig_state, block) + offsetof(gs_block_state, name), EXP_IS_INT_(type)},
@@ -214,35 +213,30 @@ static int nonempty(const char *s)
     return s != NULL && s[0] != '\0';
 }
 
-static void check_table(const char *what, const gs_field_info *info, int count,
-                        const expected_field *want, int want_count, size_t struct_size)
+static void check_table(const char *what, const gs_field_info *info, int count, const expected_field *want,
+                        int want_count, size_t struct_size)
 {
     int i, j;
     assert_int_equal(count, want_count);
     for (i = 0; i < count; ++i) {
         const gs_field_info *f = &info[i];
         const size_t member_size = f->is_integer ? sizeof(int) : sizeof(gs_real);
-        if (!nonempty(f->name) || !nonempty(f->gear_unit) || !nonempty(f->rack_unit) ||
-            !nonempty(f->doc))
-            fail_msg("%s[%d]: empty name, unit or doc ('%s', '%s', '%s')", what, i,
-                     f->name ? f->name : "(null)", f->gear_unit ? f->gear_unit : "(null)",
-                     f->rack_unit ? f->rack_unit : "(null)");
+        if (!nonempty(f->name) || !nonempty(f->gear_unit) || !nonempty(f->rack_unit) || !nonempty(f->doc))
+            fail_msg("%s[%d]: empty name, unit or doc ('%s', '%s', '%s')", what, i, f->name ? f->name : "(null)",
+                     f->gear_unit ? f->gear_unit : "(null)", f->rack_unit ? f->rack_unit : "(null)");
         for (j = 0; j < i; ++j)
-            if (strcmp(info[j].name, f->name) == 0)
-                fail_msg("%s: name '%s' at %d and %d", what, f->name, j, i);
+            if (strcmp(info[j].name, f->name) == 0) fail_msg("%s: name '%s' at %d and %d", what, f->name, j, i);
         if (i > 0 && !(f->offset > info[i - 1].offset))
-            fail_msg("%s[%d] '%s': offset %lu not above the previous %lu", what, i, f->name,
-                     (unsigned long)f->offset, (unsigned long)info[i - 1].offset);
+            fail_msg("%s[%d] '%s': offset %lu not above the previous %lu", what, i, f->name, (unsigned long)f->offset,
+                     (unsigned long)info[i - 1].offset);
         if (!(f->offset + member_size <= struct_size))
             fail_msg("%s[%d] '%s': offset %lu + %lu outside the struct (%lu B)", what, i, f->name,
-                     (unsigned long)f->offset, (unsigned long)member_size,
-                     (unsigned long)struct_size);
+                     (unsigned long)f->offset, (unsigned long)member_size, (unsigned long)struct_size);
         /* the entry describes the member of that name */
-        if (strcmp(f->name, want[i].name) != 0 || f->offset != want[i].offset ||
-            f->is_integer != want[i].is_integer)
-            fail_msg("%s[%d]: '%s' offset %lu int %d, the header gives '%s' offset %lu int %d", what,
-                     i, f->name, (unsigned long)f->offset, f->is_integer, want[i].name,
-                     (unsigned long)want[i].offset, want[i].is_integer);
+        if (strcmp(f->name, want[i].name) != 0 || f->offset != want[i].offset || f->is_integer != want[i].is_integer)
+            fail_msg("%s[%d]: '%s' offset %lu int %d, the header gives '%s' offset %lu int %d", what, i, f->name,
+                     (unsigned long)f->offset, f->is_integer, want[i].name, (unsigned long)want[i].offset,
+                     want[i].is_integer);
     }
 }
 
@@ -250,14 +244,12 @@ static void test_field_tables(void **state)
 {
     static const expected_field want_in[] = {GS_RIG_INPUT_LIST(EXP_IN_)};
     static const expected_field want_out[] = {GS_RIG_OUTPUT_LIST(EXP_OUT_)};
-    static const expected_field want_state[] = {GS_BLOCK_STATE_LIST(EXP_BLOCK_)
-                                                    GS_RIG_STATE_LIST(EXP_STATE_)};
+    static const expected_field want_state[] = {GS_BLOCK_STATE_LIST(EXP_BLOCK_) GS_RIG_STATE_LIST(EXP_STATE_)};
     /* the outputs in the order of the golden hashes (test_determinism.c) */
     static const char *const output_names[] = {
-        "base_torque",       "base_speed",     "base_angle",         "follower_speed",
-        "follower_position", "base_port_torque", "follower_port_torque", "mesh_loss_power",
-        "loss_power",        "port_power",     "contact_energy",     "temperature",
-        "backlash_position", "contact_force",  "follower_acceleration"};
+        "base_torque",      "base_speed",           "base_angle",        "follower_speed", "follower_position",
+        "base_port_torque", "follower_port_torque", "mesh_loss_power",   "loss_power",     "port_power",
+        "contact_energy",   "temperature",          "backlash_position", "contact_force",  "follower_acceleration"};
     const int n_names = (int)(sizeof output_names / sizeof output_names[0]);
     int i;
     (void)state;
@@ -273,8 +265,7 @@ static void test_field_tables(void **state)
     assert_int_equal(GS_RIG_OUTPUT_FIELDS, n_names);
     for (i = 0; i < n_names; ++i) {
         if (strcmp(gs_rig_output_info[i].name, output_names[i]) != 0)
-            fail_msg("gs_rig_output_info[%d] is '%s', expected '%s'", i,
-                     gs_rig_output_info[i].name, output_names[i]);
+            fail_msg("gs_rig_output_info[%d] is '%s', expected '%s'", i, gs_rig_output_info[i].name, output_names[i]);
         assert_int_equal(gs_rig_output_info[i].offset, (size_t)i * sizeof(gs_real));
     }
 }
@@ -341,16 +332,14 @@ static void test_retune_continues(void **state)
     assert_true((double)out.base_speed > (double)last.base_speed);
     ASSERT_NEAR(out.follower_speed, -(double)out.base_speed / g, TOL_REL, 1e-12);
     /* the angle advances by about one step of the continued speed */
-    ASSERT_NEAR((double)out.base_angle - (double)last.base_angle, dt * (double)out.base_speed,
-                0.0,
+    ASSERT_NEAR((double)out.base_angle - (double)last.base_angle, dt * (double)out.base_speed, 0.0,
                 dt * fabs((double)out.base_speed - (double)last.base_speed) +
                     4.0 * GS_EPS * fabs((double)out.base_angle));
     /* and runs under B's parameters */
     w_prev = (double)out.base_speed;
     for (k = 1; k <= 10; ++k) {
         gs_rig_step(&consts_b, &rig.s, &in, &out);
-        if (k >= 3)
-            ASSERT_NEAR(((double)out.base_speed - w_prev) / dt, alpha_b, rtol, 0.0);
+        if (k >= 3) ASSERT_NEAR(((double)out.base_speed - w_prev) / dt, alpha_b, rtol, 0.0);
         w_prev = (double)out.base_speed;
     }
     assert_true(fabs(alpha_a - alpha_b) > 0.05 * alpha_b); /* the check bites */

@@ -32,17 +32,17 @@
  */
 #include "test_common.h"
 
-#define DT 1e-3
+#define DT         1e-3
 #define RAMP_STEPS 200
 
 typedef struct {
     const char *name;
     int gear;
     gs_friction_model model;
-    double load;            /* L, N*m or N */
-    double threshold_base;  /* |T_m| above which the base drives (by hand) */
-    double threshold_load;  /* |T_m| below which the load drives (by hand) */
-    double motor_sign;      /* the sign of a motor torque that pushes against the load */
+    double load;           /* L, N*m or N */
+    double threshold_base; /* |T_m| above which the base drives (by hand) */
+    double threshold_load; /* |T_m| below which the load drives (by hand) */
+    double motor_sign;     /* the sign of a motor torque that pushes against the load */
 } lock_case;
 
 static void gear_params(gs_simple_gear_params *g, gs_friction_model model)
@@ -127,7 +127,8 @@ static lock_case make_case(const char *name, int gear, gs_friction_model model, 
         case GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY:
             w_t = (TEMPERATURE - (double)g.temperature_vector_K[0]) /
                   ((double)g.temperature_vector_K[1] - (double)g.temperature_vector_K[0]);
-            eta = (double)g.efficiency_vector[0] + w_t * ((double)g.efficiency_vector[1] - (double)g.efficiency_vector[0]);
+            eta = (double)g.efficiency_vector[0] +
+                  w_t * ((double)g.efficiency_vector[1] - (double)g.efficiency_vector[0]);
             c.threshold_base = fabs(a * load) / eta;
             c.threshold_load = eta * fabs(a * load);
             break;
@@ -139,8 +140,10 @@ static lock_case make_case(const char *name, int gear, gs_friction_model model, 
             const double w_l = base_load / (double)g.load_vector_Nm[1];
             w_t = (TEMPERATURE - (double)g.temperature_vector_K[0]) /
                   ((double)g.temperature_vector_K[1] - (double)g.temperature_vector_K[0]);
-            e_lo = (double)g.efficiency_matrix[0][0] + w_l * ((double)g.efficiency_matrix[0][1] - (double)g.efficiency_matrix[0][0]);
-            e_hi = (double)g.efficiency_matrix[1][0] + w_l * ((double)g.efficiency_matrix[1][1] - (double)g.efficiency_matrix[1][0]);
+            e_lo = (double)g.efficiency_matrix[0][0] +
+                   w_l * ((double)g.efficiency_matrix[0][1] - (double)g.efficiency_matrix[0][0]);
+            e_hi = (double)g.efficiency_matrix[1][0] +
+                   w_l * ((double)g.efficiency_matrix[1][1] - (double)g.efficiency_matrix[1][0]);
             eta = e_lo + w_t * (e_hi - e_lo);
             c.threshold_base = fabs(a * load) / eta;
             c.threshold_load = fabs(a * load) * (2.0 - 1.0 / eta);
@@ -156,7 +159,8 @@ static lock_case make_case(const char *name, int gear, gs_friction_model model, 
         } else {
             const double w_t = (TEMPERATURE - (double)kp.temperature_vector_K[0]) /
                                ((double)kp.temperature_vector_K[1] - (double)kp.temperature_vector_K[0]);
-            eta = (double)kp.efficiency_vector[0] + w_t * ((double)kp.efficiency_vector[1] - (double)kp.efficiency_vector[0]);
+            eta = (double)kp.efficiency_vector[0] +
+                  w_t * ((double)kp.efficiency_vector[1] - (double)kp.efficiency_vector[0]);
         }
         c.threshold_base = fabs(a * load) / eta;
         c.threshold_load = eta * fabs(a * load);

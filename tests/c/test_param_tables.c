@@ -60,12 +60,16 @@ static int element_fits_kind(gs_param_kind kind, size_t element_size)
     case GS_PARAM_REAL:
     case GS_PARAM_ARRAY:
     case GS_PARAM_TABLE:
-    case GS_PARAM_MATRIX: return element_size == sizeof(gs_real);
+    case GS_PARAM_MATRIX:
+        return element_size == sizeof(gs_real);
     case GS_PARAM_INT:
-    case GS_PARAM_COUNT: return element_size == sizeof(int);
+    case GS_PARAM_COUNT:
+        return element_size == sizeof(int);
     case GS_PARAM_BOOL:
-    case GS_PARAM_OPTION: return element_size == sizeof(int) || element_size == sizeof(gs_friction_model);
-    case GS_PARAM_GROUP: return 0;
+    case GS_PARAM_OPTION:
+        return element_size == sizeof(int) || element_size == sizeof(gs_friction_model);
+    case GS_PARAM_GROUP:
+        return 0;
     }
     return 0;
 }
@@ -107,8 +111,8 @@ static const char *check_coverage(const gs_param_info *table, size_t n, size_t s
             return message;
         }
         if (e->offset != round_up(end, align)) {
-            snprintf(message, sizeof message, "%s: offset %zu, expected %zu (previous member ends at %zu)",
-                     e->member, e->offset, round_up(end, align), end);
+            snprintf(message, sizeof message, "%s: offset %zu, expected %zu (previous member ends at %zu)", e->member,
+                     e->offset, round_up(end, align), end);
             return message;
         }
         if (e->offset + e->size > struct_size) {

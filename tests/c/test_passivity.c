@@ -41,9 +41,9 @@
 
 #include "test_common.h"
 
-#define RIGS 20000
-#define STEPS 120
-#define SEED 0x5EA2C11ULL
+#define RIGS     20000
+#define STEPS    120
+#define SEED     0x5EA2C11ULL
 #define ROUNDING 1024.0
 
 #ifdef GS_SINGLE_PRECISION
@@ -55,16 +55,16 @@
 typedef enum { MESH_RIGID = 0, MESH_COMPLIANT = 1, MESH_BACKLASH = 2 } mesh_kind;
 
 typedef struct {
-    int gear;                 /* 1: Simple Gear, 0: Rack & Pinion */
+    int gear; /* 1: Simple Gear, 0: Rack & Pinion */
     gs_simple_gear_params g;
     gs_rack_pinion_params k;
     gs_rig_params rp;
     gs_friction_model friction;
     gs_loss_smoothing smoothing;
     mesh_kind mesh;
-    gs_backlash_params bl;    /* a copy of the block's */
+    gs_backlash_params bl;                                 /* a copy of the block's */
     double ripple_a[2], ripple_b[2], mesh_a[2], mesh_b[2]; /* A*cos(phi), A*sin(phi) */
-    double ripple_stiffness;  /* sum i*A_i + j*Z*M_j, N*m/rad */
+    double ripple_stiffness;                               /* sum i*A_i + j*Z*M_j, N*m/rad */
     int teeth;
     double torque_scale, load_scale, speed_scale;
 } rig_case;
@@ -76,7 +76,7 @@ typedef struct {
     long substeps[7]; /* automatic, 1, 2, 4, 8, 16, 64 */
     long stribeck, ripple, heat_path, low_eta, self_locking_table;
     long regularised, speed_ramp, mesh_spring; /* the rig switches; a compliance without base inertia */
-    double worst; /* largest (created - tol)/tol seen (negative: all passed) */
+    double worst;                              /* largest (created - tol)/tol seen (negative: all passed) */
     long failed_rigs, failed_by_mesh[3], failed_by_drive[2];
 } coverage;
 
@@ -113,8 +113,7 @@ static void draw_backlash(test_rng *r, gs_backlash_params *b, int gear)
     b->enabled = 1;
     b->hard_stop_model = (gs_hard_stop_model)(rng_next(r) % 3U);
     b->linear_backlash_m = R(gap);
-    if (gear)
-        b->base_radius_m = R(log_range(r, 0.01, 0.2));
+    if (gear) b->base_radius_m = R(log_range(r, 0.01, 0.2));
     b->transition_region_m = R(gap * log_range(r, 0.01, 0.4));
     b->stiffness_N_m = R(log_range(r, 1e4, 1e8));
     b->damping_N_s_m = chance(r, 0.2) ? R(0.0) : R(log_range(r, 1.0, 1e4));
@@ -179,8 +178,7 @@ static void draw_case(test_rng *r, rig_case *c, coverage *cov)
             c->mesh_b[i] = (double)R(m) * sin((double)R(pm));
             c->ripple_stiffness += (i + 1) * (double)R(a) + (i + 1) * c->teeth * (double)R(m);
         }
-        if (c->ripple_stiffness > 0.0)
-            ++cov->ripple;
+        if (c->ripple_stiffness > 0.0) ++cov->ripple;
     }
     /* the rig switches, drawn for every rig (each changes only the paths
      * it names: the regularised friction where the driven side moves
@@ -208,8 +206,8 @@ static void draw_case(test_rng *r, rig_case *c, coverage *cov)
         g->power_threshold_W = R(log_range(r, 1e-4, 10.0));
         g->nominal_output_torque_Nm = R(log_range(r, 0.1, 100.0));
         g->efficiency_nominal = R(rng_range(r, 0.2, 0.99));
-        k_max = (1.0 / (double)g->efficiency_nominal - 1.0) * (double)g->nominal_output_torque_Nm /
-                (double)g->teeth_ratio;
+        k_max =
+            (1.0 / (double)g->efficiency_nominal - 1.0) * (double)g->nominal_output_torque_Nm / (double)g->teeth_ratio;
         g->idle_torque_Nm = R(0.999 * k_max * rng_unit(r));
         g->speed_threshold_rad_s = R(log_range(r, 1e-3, 1.0));
         g->temperature_count = 2 + (int)(rng_next(r) % 3U);
@@ -231,8 +229,7 @@ static void draw_case(test_rng *r, rig_case *c, coverage *cov)
         }
         g->thermal_mass_J_K = R(log_range(r, 1.0, 100.0));
         g->initial_temperature_K = R(rng_range(r, 270.0, 330.0));
-        if (backlash)
-            draw_backlash(r, &g->backlash, 1);
+        if (backlash) draw_backlash(r, &g->backlash, 1);
         c->friction = g->friction_model;
         c->bl = g->backlash;
     } else {
@@ -257,8 +254,7 @@ static void draw_case(test_rng *r, rig_case *c, coverage *cov)
         }
         k->thermal_mass_J_K = R(log_range(r, 1.0, 100.0));
         k->initial_temperature_K = R(rng_range(r, 270.0, 330.0));
-        if (backlash)
-            draw_backlash(r, &k->backlash, 0);
+        if (backlash) draw_backlash(r, &k->backlash, 0);
         c->friction = k->friction_model;
         c->bl = k->backlash;
     }
@@ -331,8 +327,7 @@ static contact_geom contact_of(const rig_case *c, const gs_rig_info *info)
     contact_geom g;
     double mu_b, mu_f;
     memset(&g, 0, sizeof g);
-    if (c->mesh != MESH_BACKLASH)
-        return g;
+    if (c->mesh != MESH_BACKLASH) return g;
     g.h = (double)c->rp.dt_s / info->contact_substeps;
     if (c->gear) {
         g.r_b = (double)c->g.backlash.base_radius_m;
@@ -375,20 +370,18 @@ static void report_case(const rig_case *c, int rig, int step, const char *what, 
     if (c->gear)
         print_error("  gear: ratio %.6g, rotates %d, eta %.6g, p_th %.3g, idle %.3g, tau_nom %.3g, eta_nom %.3g\n",
                     (double)c->g.teeth_ratio, (int)c->g.output_shaft_rotates, (double)c->g.efficiency_const,
-                    (double)c->g.power_threshold_W, (double)c->g.idle_torque_Nm,
-                    (double)c->g.nominal_output_torque_Nm, (double)c->g.efficiency_nominal);
+                    (double)c->g.power_threshold_W, (double)c->g.idle_torque_Nm, (double)c->g.nominal_output_torque_Nm,
+                    (double)c->g.efficiency_nominal);
     else
         print_error("  rack: r_P %.6g, eta %.6g, p_th %.3g\n", (double)gs_rack_pinion_radius(&c->k),
                     (double)c->k.efficiency_const, (double)c->k.power_threshold_W);
 }
 
 /* Records (created - tol)/tol and fails the search on a violation. */
-static int judge(coverage *cov, const rig_case *c, int rig, int step, const char *what, double created,
-                 double tol)
+static int judge(coverage *cov, const rig_case *c, int rig, int step, const char *what, double created, double tol)
 {
     const double margin = (created - tol) / tol;
-    if (margin > cov->worst)
-        cov->worst = margin;
+    if (margin > cov->worst) cov->worst = margin;
     if (created > tol) {
         if (cov->failed_rigs < (getenv("PASSIVITY_VERBOSE") ? 100000 : 8))
             report_case(c, rig, step, what, created, tol);
@@ -419,8 +412,7 @@ static int run_case(const rig_case *c, int index, test_rng *r, coverage *cov)
     gs_rig_get_info(&rig.c, &info);
     geom = contact_of(c, &info);
     checked = !(geom.kappa * eps > 1e-4);
-    if (!checked)
-        ++cov->skipped_conditioning;
+    if (!checked) ++cov->skipped_conditioning;
     w_b = (double)rig.s.base_speed;
     w_f = (double)rig.s.follower_speed;
     theta = (double)rig.s.base_angle;
@@ -500,12 +492,11 @@ static int run_case(const rig_case *c, int index, test_rng *r, coverage *cov)
             const double n_sub = (double)info.contact_substeps * (double)info.compliance_substeps;
             double work = push * d_x, e_stored0 = energy_c, e_stored1 = (double)o.contact_energy;
             int exact = 0;
-            quant = (n_sub + 1.0) * eps *
-                    (fabs(push) * (fabs(x_f) + fabs((double)o.follower_position)));
+            quant = (n_sub + 1.0) * eps * (fabs(push) * (fabs(x_f) + fabs((double)o.follower_position)));
             if (torque) {
                 work += ((double)in.base_torque - ripple_at(c, theta)) * d_theta;
-                quant += (n_sub + 1.0) * eps * fabs((double)in.base_torque) *
-                         (fabs(theta) + fabs((double)o.base_angle));
+                quant +=
+                    (n_sub + 1.0) * eps * fabs((double)in.base_torque) * (fabs(theta) + fabs((double)o.base_angle));
                 if (c->mesh == MESH_BACKLASH && c->ripple_stiffness > 0.0) {
                     /* the ripple per sub-step at that sub-step's start angle */
                     const double sweep = dt * (fabs(w_b) + fabs((double)o.base_speed)) + fabs(d_theta);
@@ -540,8 +531,7 @@ static int run_case(const rig_case *c, int index, test_rng *r, coverage *cov)
         energy_c = (double)o.contact_energy;
         twist = (double)rig.s.shaft_twist;
         w_in_last = w_in;
-        if (failures > 0)
-            break;
+        if (failures > 0) break;
     }
     return failures;
 }
@@ -551,8 +541,7 @@ static void print_coverage(const coverage *c)
     print_message("passivity search (%s): %ld rigs, %ld steps; %ld steps checked against the exact external work, "
                   "%ld against the block balance; %ld rigs beyond the float conditioning limit (stepped, not "
                   "checked)\n",
-                  PRECISION, c->rigs, c->steps, c->checked_exact, c->checked_balance,
-                  c->skipped_conditioning);
+                  PRECISION, c->rigs, c->steps, c->checked_exact, c->checked_balance, c->skipped_conditioning);
     print_message("  blocks gear %ld rack %ld; friction none %ld constant %ld load %ld temperature %ld T x load %ld; "
                   "smoothing passive %ld simscape %ld\n",
                   c->block[1], c->block[0], c->friction[0], c->friction[1], c->friction[2], c->friction[3],

@@ -31,7 +31,7 @@
 
 /* Gear rig g = 2, opposite rotation (a = -1/2); rack rig r_P = 0.05 m,
  * negative direction (a = -0.05 m/rad). No meshing loss. */
-#define GEAR_RATIO 2.0
+#define GEAR_RATIO    2.0
 #define PINION_RADIUS 0.05
 
 static double follower_per_base(int rack)
@@ -62,8 +62,7 @@ static void make_rig(test_rig *rig, int rack, int backlash, double mu_follower, 
 {
     gs_error err;
     const gs_status st = init_rig(rig, rack, backlash, mu_follower, rp, &err);
-    if (st != GS_OK)
-        report_init_failure("init_rig", st, &err, __FILE__, __LINE__);
+    if (st != GS_OK) report_init_failure("init_rig", st, &err, __FILE__, __LINE__);
 }
 
 static double stribeck_level(double coulomb, double breakaway, double v_s, double v)
@@ -123,8 +122,8 @@ static int breakaway_step(int rack, int backlash, double sign, double coulomb, d
     test_rig rig;
     make_rig(&rig, rack, backlash, 0.0, &rp);
     for (int k = 1; k <= 1000; ++k) {
-        const gs_rig_input in =
-            backlash ? rig_speed_input(0.0, sign * ((double)k - 0.5) * dL) : rig_torque_input(0.0, sign * ((double)k - 0.5) * dL);
+        const gs_rig_input in = backlash ? rig_speed_input(0.0, sign * ((double)k - 0.5) * dL)
+                                         : rig_torque_input(0.0, sign * ((double)k - 0.5) * dL);
         gs_rig_output out;
         gs_rig_step(&rig.c, &rig.s, &in, &out);
         if (!is_zero((double)out.follower_speed)) {
@@ -230,8 +229,9 @@ static shaft_case shaft_setup(int rack, double omega_n, double zeta, double load
  * port terms (the shaft and the ripple are outside the block). */
 static void assert_block_balance(const gs_rig_output *o)
 {
-    const double scale = fabs((double)o->base_port_torque * (double)o->base_speed)
-                         + fabs((double)o->follower_port_torque * (double)o->follower_speed) + fabs((double)o->loss_power);
+    const double scale = fabs((double)o->base_port_torque * (double)o->base_speed) +
+                         fabs((double)o->follower_port_torque * (double)o->follower_speed) +
+                         fabs((double)o->loss_power);
     ASSERT_NEAR(o->port_power, o->loss_power, 0.0, 256.0 * GS_EPS * scale + 1e-300);
 }
 
@@ -319,10 +319,10 @@ static void test_compliance_step_response(void **state)
             assert_block_balance(&out);
             const double t = k * dt;
             const double phi = (double)rig.s.shaft_twist;
-            const double closed = s.phi_inf * (1.0 - exp(-sigma * t) * (cos(omega_d * t)
-                                               + zeta / sqrt(1.0 - zeta * zeta) * sin(omega_d * t)));
-            if (k <= 40)
-                ASSERT_NEAR(phi, closed, 0.0, 0.02 * fabs(s.phi_inf));
+            const double closed =
+                s.phi_inf *
+                (1.0 - exp(-sigma * t) * (cos(omega_d * t) + zeta / sqrt(1.0 - zeta * zeta) * sin(omega_d * t)));
+            if (k <= 40) ASSERT_NEAR(phi, closed, 0.0, 0.02 * fabs(s.phi_inf));
             dev[k] = phi - s.phi_inf;
             energy[k] = shaft_energy(&s, &rig.s);
         }
@@ -332,8 +332,7 @@ static void test_compliance_step_response(void **state)
         for (int k = 1; k <= N; ++k)
             if ((dev[k - 1] < 0.0) != (dev[k] < 0.0)) {
                 const double t = ((k - 1) + dev[k - 1] / (dev[k - 1] - dev[k])) * dt;
-                if (first < 0.0)
-                    first = t;
+                if (first < 0.0) first = t;
                 last = t;
                 ++crossings;
             }
@@ -491,8 +490,8 @@ static void test_ripple_at_angles(void **state)
                     worst = dmax(worst, fabs((double)out.base_torque - want));
                     theta = (double)out.base_angle;
                 }
-                print_message("%s%s w = %g: |ripple - closed form| <= %.3g N*m at %.0f rad\n",
-                              rack ? "rack" : "gear", backlash ? " backlash" : "", w, worst, theta);
+                print_message("%s%s w = %g: |ripple - closed form| <= %.3g N*m at %.0f rad\n", rack ? "rack" : "gear",
+                              backlash ? " backlash" : "", w, worst, theta);
                 ASSERT_NEAR(theta, 25000 * dt * w, TOL_ACC, 0.0);
 #ifdef GS_SINGLE_PRECISION
                 /* float angle: its last bit times Z*2 harmonics */
@@ -523,8 +522,8 @@ static void test_ripple_in_compliant_shaft(void **state)
         double phi = 0.0;
         for (int it = 0; it < 100; ++it)
             phi = ripple_at(&RIPPLE, -phi) / s.k;
-        print_message("%s: twist %.9g rad, closed form %.9g rad\n", rack ? "rack" : "gear",
-                      (double)rig.s.shaft_twist, phi);
+        print_message("%s: twist %.9g rad, closed form %.9g rad\n", rack ? "rack" : "gear", (double)rig.s.shaft_twist,
+                      phi);
         assert_true(fabs(phi) > 1e-4);
         ASSERT_NEAR(rig.s.shaft_twist, phi, TOL_ACC, 0.0);
         ASSERT_NEAR(out.base_torque, s.k * phi, TOL_ACC, 0.0);
@@ -572,8 +571,8 @@ static void test_ripple_conservative(void **state)
             w_min = w < w_min ? w : w_min;
             w_max = w > w_max ? w : w_max;
         }
-        print_message("%s: energy within %.3g J of %.4g J, speed %.4f..%.4f rad/s\n", rack ? "rack" : "gear",
-                      worst, e0, w_min, w_max);
+        print_message("%s: energy within %.3g J of %.4g J, speed %.4f..%.4f rad/s\n", rack ? "rack" : "gear", worst, e0,
+                      w_min, w_max);
         /* the ripple moves the speed, and over 20 s (60 turns) the energy
          * stays within 1.5 % of the potential's swing (about 0.75 J) and does
          * not drift (an earlier version that evaluated the ripple at the
@@ -592,11 +591,28 @@ typedef struct {
     const char *parameter;
 } rule_case;
 
-static void brk_below(gs_rig_params *rp) { rp->load_coulomb_friction = R(2.0); rp->load_breakaway_friction = R(1.0); }
-static void brk_negative(gs_rig_params *rp) { rp->load_breakaway_friction = R(-1.0); }
-static void brk_nan(gs_rig_params *rp) { rp->load_breakaway_friction = R(NAN); }
-static void stribeck_zero(gs_rig_params *rp) { rp->load_breakaway_friction = R(1.0); rp->load_stribeck_speed = R(0.0); }
-static void stribeck_off_zero(gs_rig_params *rp) { rp->load_stribeck_speed = R(0.0); }
+static void brk_below(gs_rig_params *rp)
+{
+    rp->load_coulomb_friction = R(2.0);
+    rp->load_breakaway_friction = R(1.0);
+}
+static void brk_negative(gs_rig_params *rp)
+{
+    rp->load_breakaway_friction = R(-1.0);
+}
+static void brk_nan(gs_rig_params *rp)
+{
+    rp->load_breakaway_friction = R(NAN);
+}
+static void stribeck_zero(gs_rig_params *rp)
+{
+    rp->load_breakaway_friction = R(1.0);
+    rp->load_stribeck_speed = R(0.0);
+}
+static void stribeck_off_zero(gs_rig_params *rp)
+{
+    rp->load_stribeck_speed = R(0.0);
+}
 /* positive, but its square's reciprocal overflows */
 static void stribeck_tiny(gs_rig_params *rp)
 {
@@ -607,23 +623,60 @@ static void stribeck_tiny(gs_rig_params *rp)
     rp->load_stribeck_speed = R(1e-160);
 #endif
 }
-static void k_negative(gs_rig_params *rp) { rp->compliance_stiffness_Nm_rad = R(-1.0); }
-static void c_negative(gs_rig_params *rp) { rp->compliance_damping_Nm_s_rad = R(-1.0); }
-static void k_inf(gs_rig_params *rp) { rp->compliance_stiffness_Nm_rad = R(INFINITY); }
-static void k_no_inertia(gs_rig_params *rp) { rp->compliance_stiffness_Nm_rad = R(100.0); }
-static void k_ok(gs_rig_params *rp) { rp->compliance_stiffness_Nm_rad = R(100.0); rp->base_inertia_kg_m2 = R(0.01); }
+static void k_negative(gs_rig_params *rp)
+{
+    rp->compliance_stiffness_Nm_rad = R(-1.0);
+}
+static void c_negative(gs_rig_params *rp)
+{
+    rp->compliance_damping_Nm_s_rad = R(-1.0);
+}
+static void k_inf(gs_rig_params *rp)
+{
+    rp->compliance_stiffness_Nm_rad = R(INFINITY);
+}
+static void k_no_inertia(gs_rig_params *rp)
+{
+    rp->compliance_stiffness_Nm_rad = R(100.0);
+}
+static void k_ok(gs_rig_params *rp)
+{
+    rp->compliance_stiffness_Nm_rad = R(100.0);
+    rp->base_inertia_kg_m2 = R(0.01);
+}
 static void k_torque(gs_rig_params *rp)
 {
     k_ok(rp);
     rp->base_drive = GS_BASE_TORQUE_DRIVEN;
 }
-static void ripple_amp_negative(gs_rig_params *rp) { rp->ripple_revolution_amplitude_Nm[1] = R(-0.1); }
-static void ripple_phase_nan(gs_rig_params *rp) { rp->ripple_revolution_phase_rad[0] = R(NAN); }
-static void mesh_amp_inf(gs_rig_params *rp) { rp->ripple_mesh_amplitude_Nm[0] = R(INFINITY); }
-static void mesh_phase_inf(gs_rig_params *rp) { rp->ripple_mesh_phase_rad[1] = R(-INFINITY); }
-static void mesh_no_teeth(gs_rig_params *rp) { rp->ripple_mesh_amplitude_Nm[1] = R(0.1); }
-static void teeth_negative(gs_rig_params *rp) { rp->ripple_mesh_teeth = -3; }
-static void rev_no_teeth(gs_rig_params *rp) { rp->ripple_revolution_amplitude_Nm[0] = R(0.1); }
+static void ripple_amp_negative(gs_rig_params *rp)
+{
+    rp->ripple_revolution_amplitude_Nm[1] = R(-0.1);
+}
+static void ripple_phase_nan(gs_rig_params *rp)
+{
+    rp->ripple_revolution_phase_rad[0] = R(NAN);
+}
+static void mesh_amp_inf(gs_rig_params *rp)
+{
+    rp->ripple_mesh_amplitude_Nm[0] = R(INFINITY);
+}
+static void mesh_phase_inf(gs_rig_params *rp)
+{
+    rp->ripple_mesh_phase_rad[1] = R(-INFINITY);
+}
+static void mesh_no_teeth(gs_rig_params *rp)
+{
+    rp->ripple_mesh_amplitude_Nm[1] = R(0.1);
+}
+static void teeth_negative(gs_rig_params *rp)
+{
+    rp->ripple_mesh_teeth = -3;
+}
+static void rev_no_teeth(gs_rig_params *rp)
+{
+    rp->ripple_revolution_amplitude_Nm[0] = R(0.1);
+}
 
 static const rule_case RULES[] = {
     {"breakaway below Coulomb", brk_below, 0, GS_E_BREAKAWAY, "load_breakaway_friction"},
@@ -666,8 +719,7 @@ static void test_validity_rules(void **state)
             if (st != c->want || strcmp(err.parameter, c->parameter) != 0)
                 fail_msg("%s (%s): status %d '%s', expected %d '%s'", c->name, rack ? "rack" : "gear", (int)st,
                          err.parameter, (int)c->want, c->parameter);
-            if (st != GS_OK)
-                assert_memory_equal(&rig, &before, sizeof rig);
+            if (st != GS_OK) assert_memory_equal(&rig, &before, sizeof rig);
         }
 }
 

@@ -32,7 +32,7 @@
 
 /* Gear rig g = 2, opposite rotation (a = -1/2); rack rig r_P = 0.05 m,
  * negative direction (a = -0.05 m/rad); no meshing loss. */
-#define GEAR_RATIO 2.0
+#define GEAR_RATIO    2.0
 #define PINION_RADIUS 0.05
 
 static double follower_per_base(int rack)
@@ -198,8 +198,8 @@ static void test_free_deceleration(void **state)
         double e16, e64;
         free_deceleration_error(rack, 16, &e16);
         free_deceleration_error(rack, 64, &e64);
-        print_message("%s: worst relative speed error %.3g (16 sub-steps), %.3g (64)\n",
-                      rack ? "rack" : "gear", e16, e64);
+        print_message("%s: worst relative speed error %.3g (16 sub-steps), %.3g (64)\n", rack ? "rack" : "gear", e16,
+                      e64);
         assert_true(e64 < 1e-2);
         assert_true(e64 < 0.4 * e16);
     }
@@ -256,15 +256,13 @@ static void test_compliant_mesh_ring(void **state)
         for (int k = 1; k <= N; ++k)
             if ((dev[k - 1] < 0.0) != (dev[k] < 0.0)) {
                 const double t = ((k - 1) + dev[k - 1] / (dev[k - 1] - dev[k])) * dt;
-                if (first < 0.0)
-                    first = t;
+                if (first < 0.0) first = t;
                 last = t;
                 ++crossings;
             }
         const double f_ring = 0.5 * (crossings - 1) / (last - first);
         const double f_want = omega_n * sqrt(1.0 - zeta * zeta) / (2.0 * TEST_PI);
-        print_message("%s compliant mesh: ring %.4f Hz (closed form %.4f)\n", rack ? "rack" : "gear", f_ring,
-                      f_want);
+        print_message("%s compliant mesh: ring %.4f Hz (closed form %.4f)\n", rack ? "rack" : "gear", f_ring, f_want);
         ASSERT_NEAR(f_ring, f_want, 0.005, 0.0);
         for (int k = 0; k < 3000; ++k)
             gs_rig_step(&rig.c, &rig.s, &in, &out);
@@ -364,8 +362,8 @@ static void test_compliant_mesh_passive(void **state)
             else
                 ASSERT_LE(e, e_prev, TOL_ENERGY * e0);
             e_prev = e;
-            const double scale = fabs((double)out.base_port_torque * (double)out.base_speed)
-                                 + fabs((double)out.follower_port_torque * (double)out.follower_speed);
+            const double scale = fabs((double)out.base_port_torque * (double)out.base_speed) +
+                                 fabs((double)out.follower_port_torque * (double)out.follower_speed);
             ASSERT_NEAR(out.port_power, out.loss_power, 0.0, 256.0 * GS_EPS * scale + 1e-300);
         }
         assert_true(e0 > 0.0);
@@ -403,8 +401,7 @@ static void test_step_mean_speed(void **state)
                 ASSERT_NEAR(out.base_torque, a * a * (j_f * alpha + mu_f * w_terms), TOL_REL * 100.0, 0.0);
                 ASSERT_NEAR(out.base_speed, w, TOL_REL, 0.0);
                 ASSERT_NEAR(out.follower_speed, a * w, TOL_REL, 0.0);
-                if (ramp)
-                    ASSERT_NEAR(out.base_angle, 0.5 * alpha * (k * dt) * (k * dt), TOL_ACC, 0.0);
+                if (ramp) ASSERT_NEAR(out.base_angle, 0.5 * alpha * (k * dt) * (k * dt), TOL_ACC, 0.0);
                 /* the block's power balance at the speed the terms used */
                 ASSERT_NEAR(out.port_power, out.loss_power, 0.0,
                             256.0 * GS_EPS * fabs((double)out.base_port_torque * w_terms) + 1e-300);
@@ -424,14 +421,10 @@ static void test_defaults_off(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_creep_under_load),
-        cmocka_unit_test(test_free_deceleration),
-        cmocka_unit_test(test_mesh_loss_creeps),
-        cmocka_unit_test(test_compliant_mesh_ring),
-        cmocka_unit_test(test_compliant_mesh_creep),
-        cmocka_unit_test(test_compliant_mesh_passive),
-        cmocka_unit_test(test_step_mean_speed),
-        cmocka_unit_test(test_defaults_off),
+        cmocka_unit_test(test_creep_under_load),     cmocka_unit_test(test_free_deceleration),
+        cmocka_unit_test(test_mesh_loss_creeps),     cmocka_unit_test(test_compliant_mesh_ring),
+        cmocka_unit_test(test_compliant_mesh_creep), cmocka_unit_test(test_compliant_mesh_passive),
+        cmocka_unit_test(test_step_mean_speed),      cmocka_unit_test(test_defaults_off),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -61,10 +61,10 @@
  * settled contact force comes from a position x ~ b/2 = 5e-4 m held in float
  * (ulp 6e-11 m, times K = 1e6 N/m) and from sums over the contact sub-steps. */
 #ifdef GS_SINGLE_PRECISION
-#define SETTLED_TOL_RIGID 1e-4
+#define SETTLED_TOL_RIGID    1e-4
 #define SETTLED_TOL_BACKLASH 1e-4
 #else
-#define SETTLED_TOL_RIGID 1e-9
+#define SETTLED_TOL_RIGID    1e-9
 #define SETTLED_TOL_BACKLASH 1e-7
 #endif
 
@@ -73,7 +73,7 @@
  * settles within tens of ms after the gap closes. Torque-driven: the slowest
  * rigid-body time constant is (a*J_F + rho^2*J_B)/(a*mu_F + rho^2*mu_B)
  * <= max(J_F/mu_F, J_B/mu_B) = 0.1 s (gear and rack), so 4 s leave exp(-40). */
-#define N_STEPS_SPEED 2000
+#define N_STEPS_SPEED  2000
 #define N_STEPS_TORQUE 4000
 
 #define DT 1e-3
@@ -83,29 +83,26 @@ typedef enum { FLOW_BASE_DRIVES = 0, FLOW_FOLLOWER_DRIVES = 1 } flow_kind;
 
 /* ---- Hand model of one case (all double). */
 typedef struct {
-    double rho;          /* omega_B/omega_F, signed */
-    double mu_B, mu_F;   /* viscous */
+    double rho;        /* omega_B/omega_F, signed */
+    double mu_B, mu_F; /* viscous */
     gs_friction_model model;
-    double eta;          /* constant, or interpolated from the temperature table */
-    double C0, k;        /* load-dependent: g*tau_idle and k (2.5) */
-    double g_load;       /* 2-D table: base load = |T_F|/g_load */
-    double T;            /* temperature for the tables (measured input) */
+    double eta;    /* constant, or interpolated from the temperature table */
+    double C0, k;  /* load-dependent: g*tau_idle and k (2.5) */
+    double g_load; /* 2-D table: base load = |T_F|/g_load */
+    double T;      /* temperature for the tables (measured input) */
     double Tv[GS_TABLE_MAX], Lv[GS_TABLE_MAX], E[GS_TABLE_MAX][GS_TABLE_MAX];
     int nT, nL;
-    double coul;         /* rig-level Coulomb friction on the driven side */
-    double offset;       /* rig-level load offset */
+    double coul;   /* rig-level Coulomb friction on the driven side */
+    double offset; /* rig-level load offset */
 } hand_model;
 
 /* Linear interpolation, held at the ends (physics.md 2.4). */
 static double interp1(const double *x, const double *y, int n, double q)
 {
     int i;
-    if (q <= x[0])
-        return y[0];
-    if (q >= x[n - 1])
-        return y[n - 1];
-    for (i = 0; i < n - 2 && q > x[i + 1]; ++i) {
-    }
+    if (q <= x[0]) return y[0];
+    if (q >= x[n - 1]) return y[n - 1];
+    for (i = 0; i < n - 2 && q > x[i + 1]; ++i) {}
     return y[i] + (y[i + 1] - y[i]) * (q - x[i]) / (x[i + 1] - x[i]);
 }
 
@@ -136,8 +133,7 @@ static void cell(const double *x, int n, double q, int *i, double *w)
         *w = 1.0;
         return;
     }
-    for (j = 0; j < n - 2 && q > x[j + 1]; ++j) {
-    }
+    for (j = 0; j < n - 2 && q > x[j + 1]; ++j) {}
     *i = j;
     *w = (q - x[j]) / (x[j + 1] - x[j]);
 }
@@ -149,19 +145,17 @@ static double bilinear(const hand_model *h, double T, double load)
     double u, w;
     cell(h->Tv, h->nT, T, &i, &u);
     cell(h->Lv, h->nL, load, &j, &w);
-    return (1.0 - u) * (1.0 - w) * h->E[i][j] + (1.0 - u) * w * h->E[i][j + 1] +
-           u * (1.0 - w) * h->E[i + 1][j] + u * w * h->E[i + 1][j + 1];
+    return (1.0 - u) * (1.0 - w) * h->E[i][j] + (1.0 - u) * w * h->E[i][j + 1] + u * (1.0 - w) * h->E[i + 1][j] +
+           u * w * h->E[i + 1][j + 1];
 }
 
 /* The loss law written as a*T_F = c - rho*T_B (see the header comment).
  * phi = +1: base drives, -1: follower drives; sigma = sign(omega_F). */
-static void loss_ac(const hand_model *h, double T_F, double sigma, double phi, double *a,
-                    double *c)
+static void loss_ac(const hand_model *h, double T_F, double sigma, double phi, double *a, double *c)
 {
     *a = 1.0;
     *c = 0.0;
-    if (h->model == GS_FRICTION_CONSTANT_EFFICIENCY ||
-        h->model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY) {
+    if (h->model == GS_FRICTION_CONSTANT_EFFICIENCY || h->model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY) {
         *a = phi > 0.0 ? 1.0 / h->eta : h->eta;
     } else if (h->model == GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY) {
         *a = 1.0 + phi * h->k;
@@ -174,14 +168,13 @@ static void loss_ac(const hand_model *h, double T_F, double sigma, double phi, d
 
 typedef struct {
     double omega_B, omega_F;
-    double tau_B;        /* base port torque (= base torque at steady state) */
-    double tau_F;        /* driven port torque */
-    double T_F;          /* net follower torque (for the regime checks) */
+    double tau_B; /* base port torque (= base torque at steady state) */
+    double tau_F; /* driven port torque */
+    double T_F;   /* net follower torque (for the regime checks) */
 } settled_point;
 
 /* Speed-driven base at omega_B, load at the driven side. */
-static settled_point expect_speed_driven(const hand_model *h, double omega_B, double load,
-                                         double phi)
+static settled_point expect_speed_driven(const hand_model *h, double omega_B, double load, double phi)
 {
     settled_point p;
     double a, c, sigma, L, T_B;
@@ -198,8 +191,7 @@ static settled_point expect_speed_driven(const hand_model *h, double omega_B, do
 }
 
 /* Residual of the torque-driven balance a(T_F)*T_F - c + rho*T_B at omega_F. */
-static double torque_residual(const hand_model *h, double M, double L, double sigma, double phi,
-                              double w)
+static double torque_residual(const hand_model *h, double M, double L, double sigma, double phi, double w)
 {
     double a, c;
     const double T_F = L - h->mu_F * w;
@@ -209,8 +201,7 @@ static double torque_residual(const hand_model *h, double M, double L, double si
 
 /* Torque-driven base with motor torque M; sigma is the assumed sign of
  * omega_F (checked by the caller). *ok = 0 if the bisection has no bracket. */
-static settled_point expect_torque_driven(const hand_model *h, double M, double load,
-                                          double sigma, double phi, int *ok)
+static settled_point expect_torque_driven(const hand_model *h, double M, double load, double sigma, double phi, int *ok)
 {
     settled_point p;
     const double L = load + h->offset - h->coul * sigma;
@@ -225,8 +216,7 @@ static settled_point expect_torque_driven(const hand_model *h, double M, double 
         double rlo = torque_residual(h, M, L, sigma, phi, lo);
         double rhi = torque_residual(h, M, L, sigma, phi, hi);
         int it;
-        if (!(rlo * rhi < 0.0))
-            *ok = 0;
+        if (!(rlo * rhi < 0.0)) *ok = 0;
         for (it = 0; it < 200; ++it) {
             const double mid = 0.5 * (lo + hi);
             const double rm = torque_residual(h, M, L, sigma, phi, mid);
@@ -251,9 +241,9 @@ typedef struct {
     const char *name;
     gs_friction_model model;
     gs_loss_smoothing smoothing;
-    double g;       /* gear: teeth ratio */
-    double eta;     /* constant efficiency */
-    int nominal;    /* load-dependent at the nominal point */
+    double g;    /* gear: teeth ratio */
+    double eta;  /* constant efficiency */
+    int nominal; /* load-dependent at the nominal point */
 } gear_variant;
 
 static const gear_variant gear_variants[] = {
@@ -262,12 +252,9 @@ static const gear_variant gear_variants[] = {
     {"const(0.5)", GS_FRICTION_CONSTANT_EFFICIENCY, GS_SMOOTHING_PASSIVE, 0.8, 0.5, 0},
     {"const(0.3)", GS_FRICTION_CONSTANT_EFFICIENCY, GS_SMOOTHING_PASSIVE, 2.5, 0.3, 0},
     {"load-dep", GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY, GS_SMOOTHING_PASSIVE, 2.5, 1.0, 0},
-    {"load-dep(nominal point)", GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY, GS_SMOOTHING_PASSIVE, 0.8,
-     1.0, 1},
-    {"temperature", GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY, GS_SMOOTHING_PASSIVE, 2.5, 1.0,
-     0},
-    {"temperature+load", GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY, GS_SMOOTHING_PASSIVE,
-     2.5, 1.0, 0},
+    {"load-dep(nominal point)", GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY, GS_SMOOTHING_PASSIVE, 0.8, 1.0, 1},
+    {"temperature", GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY, GS_SMOOTHING_PASSIVE, 2.5, 1.0, 0},
+    {"temperature+load", GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY, GS_SMOOTHING_PASSIVE, 2.5, 1.0, 0},
 };
 #define N_GEAR_VARIANTS ((int)(sizeof gear_variants / sizeof gear_variants[0]))
 
@@ -289,26 +276,26 @@ static const gs_hard_stop_model hard_stops[3] = {GS_HARD_STOP_SMOOTH, GS_HARD_ST
                                                  GS_HARD_STOP_FULL_UNDAMPED};
 
 /* Gear rig data (follower-referred where it matters). */
-#define G_JF 0.05
-#define G_JB 0.01
-#define G_MUB 0.1
-#define G_MUF 0.5
-#define G_COUL 0.2
+#define G_JF     0.05
+#define G_JB     0.01
+#define G_MUB    0.1
+#define G_MUF    0.5
+#define G_COUL   0.2
 #define G_OFFSET 0.4
-#define G_W0 4.0       /* |omega_F| at the design point, rad/s */
-#define G_T0 3.0       /* |T_F| at the design point, N*m */
-#define G_TMEAS 311.0  /* measured temperature, 1-D table */
+#define G_W0     4.0   /* |omega_F| at the design point, rad/s */
+#define G_T0     3.0   /* |T_F| at the design point, N*m */
+#define G_TMEAS  311.0 /* measured temperature, 1-D table */
 #define G_TMEAS2 301.0 /* measured temperature, 2-D table */
 /* Rack rig data (rack-referred). */
-#define R_M 2.0
-#define R_JB 0.01
-#define R_MUP 0.1
-#define R_MUR 20.0
-#define R_COUL 3.0
+#define R_M      2.0
+#define R_JB     0.01
+#define R_MUP    0.1
+#define R_MUR    20.0
+#define R_COUL   3.0
 #define R_OFFSET (-5.0)
-#define R_V0 0.5       /* |v_R|, m/s */
-#define R_F0 40.0      /* |F_net|, N */
-#define R_TMEAS 313.0
+#define R_V0     0.5  /* |v_R|, m/s */
+#define R_F0     40.0 /* |F_net|, N */
+#define R_TMEAS  313.0
 
 typedef struct {
     int cases;
@@ -330,12 +317,10 @@ typedef struct {
 static void print_case(const case_label *cl)
 {
     print_error("settled: %s / %s / backlash %s / %s / %s%s%s / %s / omega_F %s:\n",
-                cl->blk == BLK_GEAR ? "simple gear" : "rack & pinion", cl->model,
-                cl->backlash ? "on" : "off",
+                cl->blk == BLK_GEAR ? "simple gear" : "rack & pinion", cl->model, cl->backlash ? "on" : "off",
                 cl->drive == GS_BASE_SPEED_DRIVEN ? "speed-driven" : "torque-driven", cl->dir,
                 cl->param[0] ? " / " : "", cl->param,
-                cl->flow == FLOW_BASE_DRIVES ? "base drives (load opposes)"
-                                             : "follower drives (load overhauls)",
+                cl->flow == FLOW_BASE_DRIVES ? "base drives (load opposes)" : "follower drives (load overhauls)",
                 cl->sigma > 0.0 ? "> 0" : "< 0");
 }
 
@@ -344,15 +329,13 @@ static void print_case(const case_label *cl)
  * [1], over every value checked: the figure the matrix reports. */
 static double worst_rel[2];
 
-static int check_value(const case_label *cl, int *header, const char *what, double got,
-                       double want, double settled_drift, double rtol, double scale)
+static int check_value(const case_label *cl, int *header, const char *what, double got, double want,
+                       double settled_drift, double rtol, double scale)
 {
     const double rel = fabs(got - want) / dmax(fabs(want), scale);
     double *worst = &worst_rel[cl->backlash ? 1 : 0];
-    if (rel > *worst)
-        *worst = rel;
-    if (near_enough(got, want, rtol, rtol * scale))
-        return 1;
+    if (rel > *worst) *worst = rel;
+    if (near_enough(got, want, rtol, rtol * scale)) return 1;
     if (!*header) {
         print_case(cl);
         *header = 1;
@@ -364,24 +347,19 @@ static int check_value(const case_label *cl, int *header, const char *what, doub
 }
 
 /* Design checks: the operating point must lie where the hand law holds. */
-static int design_ok(const case_label *cl, const hand_model *h, const settled_point *p,
-                     double phi, double sigma, double p_th, double w_th, double w_coul)
+static int design_ok(const case_label *cl, const hand_model *h, const settled_point *p, double phi, double sigma,
+                     double p_th, double w_th, double w_coul)
 {
     const double pw = p->T_F * p->omega_F;
     int ok = 1;
-    if (!(sgn(p->omega_F) * sigma > 0.0))
-        ok = 0;
-    if (!((phi > 0.0) ? (pw < 0.0) : (pw > 0.0)))
-        ok = 0;
-    if (!(fabs(pw) > 1e4 * p_th && fabs(p->omega_F) > 50.0 * w_th &&
-          fabs(p->omega_F) > 50.0 * w_coul))
-        ok = 0;
-    if (h->model == GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY && !(h->k < 1.0 && h->k >= 0.0))
-        ok = 0;
+    if (!(sgn(p->omega_F) * sigma > 0.0)) ok = 0;
+    if (!((phi > 0.0) ? (pw < 0.0) : (pw > 0.0))) ok = 0;
+    if (!(fabs(pw) > 1e4 * p_th && fabs(p->omega_F) > 50.0 * w_th && fabs(p->omega_F) > 50.0 * w_coul)) ok = 0;
+    if (h->model == GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY && !(h->k < 1.0 && h->k >= 0.0)) ok = 0;
     if (!ok) {
         print_case(cl);
-        print_error("    TEST DESIGN ERROR: omega_F %.6g, T_F %.6g, power %.6g (phi %+.0f)\n",
-                    p->omega_F, p->T_F, pw, phi);
+        print_error("    TEST DESIGN ERROR: omega_F %.6g, T_F %.6g, power %.6g (phi %+.0f)\n", p->omega_F, p->T_F, pw,
+                    phi);
     }
     return ok;
 }
@@ -397,15 +375,13 @@ static void run_rig(test_rig *rig, const gs_rig_input *in, int steps, run_result
     memset(res, 0, sizeof *res);
     for (k = 0; k < steps; ++k) {
         gs_rig_step(&rig->c, &rig->s, in, &out);
-        if (k == steps - 201)
-            res->earlier = out;
+        if (k == steps - 201) res->earlier = out;
     }
     res->last = out;
 }
 
 /* Compares a settled run with the hand point. Returns 1 on success. */
-static int compare_settled(const case_label *cl, const run_result *r, const settled_point *p,
-                           double rtol)
+static int compare_settled(const case_label *cl, const run_result *r, const settled_point *p, double rtol)
 {
     int header = 0, ok = 1;
     const double tq_scale = dmax(dmax(fabs(p->tau_B), fabs(p->tau_F)), 1e-3);
@@ -416,16 +392,16 @@ static int compare_settled(const case_label *cl, const run_result *r, const sett
         print_error("    non-finite output\n");
         return 0;
     }
-    ok &= check_value(cl, &header, "base_port_torque", (double)r->last.base_port_torque,
-                      p->tau_B, DRIFT(base_port_torque), rtol, tq_scale);
-    ok &= check_value(cl, &header, "base_torque", (double)r->last.base_torque, p->tau_B,
-                      DRIFT(base_torque), rtol, tq_scale);
-    ok &= check_value(cl, &header, "follower_port_torque", (double)r->last.follower_port_torque,
-                      p->tau_F, DRIFT(follower_port_torque), rtol, tq_scale);
-    ok &= check_value(cl, &header, "follower_speed", (double)r->last.follower_speed, p->omega_F,
-                      DRIFT(follower_speed), rtol, w_scale);
-    ok &= check_value(cl, &header, "base_speed", (double)r->last.base_speed, p->omega_B,
-                      DRIFT(base_speed), rtol, w_scale);
+    ok &= check_value(cl, &header, "base_port_torque", (double)r->last.base_port_torque, p->tau_B,
+                      DRIFT(base_port_torque), rtol, tq_scale);
+    ok &= check_value(cl, &header, "base_torque", (double)r->last.base_torque, p->tau_B, DRIFT(base_torque), rtol,
+                      tq_scale);
+    ok &= check_value(cl, &header, "follower_port_torque", (double)r->last.follower_port_torque, p->tau_F,
+                      DRIFT(follower_port_torque), rtol, tq_scale);
+    ok &= check_value(cl, &header, "follower_speed", (double)r->last.follower_speed, p->omega_F, DRIFT(follower_speed),
+                      rtol, w_scale);
+    ok &= check_value(cl, &header, "base_speed", (double)r->last.base_speed, p->omega_B, DRIFT(base_speed), rtol,
+                      w_scale);
 #undef DRIFT
     return ok;
 }
@@ -477,9 +453,8 @@ static void set_backlash(gs_backlash_params *bl, int on, int which)
  * gets omega_B = rho*omega_F*, the torque-driven rig the motor torque that
  * holds that point. The expectations are then re-derived forward from the
  * inputs actually passed (rounded to gs_real). */
-static void run_case(matrix_stats *st, const case_label *cl, const hand_model *h0,
-                     test_rig *rig, double w0, double t0, double p_th, double w_th, double w_coul,
-                     double measured_T)
+static void run_case(matrix_stats *st, const case_label *cl, const hand_model *h0, test_rig *rig, double w0, double t0,
+                     double p_th, double w_th, double w_coul, double measured_T)
 {
     const double sigma = cl->sigma;
     const double phi = cl->flow == FLOW_BASE_DRIVES ? 1.0 : -1.0;
@@ -503,26 +478,20 @@ static void run_case(matrix_stats *st, const case_label *cl, const hand_model *h
     } else {
         double a, c;
         loss_ac(&h, TF_star, sigma, phi, &a, &c);
-        in.base_torque =
-            R((c - a * TF_star) / h.rho + h.mu_B * h.rho * wF_star);
-        p = expect_torque_driven(&h, (double)in.base_torque, (double)in.load, sigma, phi,
-                                 &ok);
+        in.base_torque = R((c - a * TF_star) / h.rho + h.mu_B * h.rho * wF_star);
+        p = expect_torque_driven(&h, (double)in.base_torque, (double)in.load, sigma, phi, &ok);
         /* the design point must come back (checks the algebra of both directions) */
-        if (!near_enough(p.omega_F, wF_star, 1e-5, 0.0))
-            ok = 0;
+        if (!near_enough(p.omega_F, wF_star, 1e-5, 0.0)) ok = 0;
         if (!ok) {
             print_case(cl);
-            print_error("    TEST DESIGN ERROR: forward solve %.9g, design point %.9g\n",
-                        p.omega_F, wF_star);
+            print_error("    TEST DESIGN ERROR: forward solve %.9g, design point %.9g\n", p.omega_F, wF_star);
         }
         run_rig(rig, &in, N_STEPS_TORQUE, &res);
     }
     ok = ok && design_ok(cl, &h, &p, phi, sigma, p_th, w_th, w_coul);
-    if (ok)
-        ok = compare_settled(cl, &res, &p, rtol);
+    if (ok) ok = compare_settled(cl, &res, &p, rtol);
     st->cases++;
-    if (!ok)
-        st->failures++;
+    if (!ok) st->failures++;
 }
 
 /* One case of the simple gear matrix: variant iv, backlash ib, drive id (1: torque),
@@ -573,8 +542,7 @@ static void gear_case(matrix_stats *st, int iv, int ib, int id, int ir, int ifl)
          * every entry > 0.5, so 2 - 1/eta > 0 (no self-locking) */
         const double Tv[3] = {280.0, 320.0, 360.0};
         const double Lv[3] = {0.0, 4.0, 12.0};
-        const double E[3][3] = {
-            {0.70, 0.85, 0.92}, {0.65, 0.80, 0.90}, {0.60, 0.75, 0.86}};
+        const double E[3][3] = {{0.70, 0.85, 0.92}, {0.65, 0.80, 0.90}, {0.60, 0.75, 0.86}};
         int i, j;
         gp.temperature_count = 3;
         gp.load_count = 3;
@@ -597,8 +565,7 @@ static void gear_case(matrix_stats *st, int iv, int ib, int id, int ir, int ifl)
 
     h = gear_hand(&gp, &rp);
     if (v->model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY)
-        h.eta = table_eta(gp.temperature_vector_K, gp.efficiency_vector, gp.temperature_count,
-                          (double)R(measured_T));
+        h.eta = table_eta(gp.temperature_vector_K, gp.efficiency_vector, gp.temperature_count, (double)R(measured_T));
     cl.blk = BLK_GEAR;
     cl.model = v->name;
     cl.backlash = ib;
@@ -617,14 +584,12 @@ static void gear_case(matrix_stats *st, int iv, int ib, int id, int ir, int ifl)
          * g*|T_B| = tau_nom/eta_nom (2.4 at tau_nom) */
         const double a = 1.0 + h.k;
         const double gTB = a * t0 + h.C0;
-        if (!near_enough(gTB, t0 / (double)gp.efficiency_nominal, 1e-12,
-                         0.0))
+        if (!near_enough(gTB, t0 / (double)gp.efficiency_nominal, 1e-12, 0.0))
             fail_msg("nominal point: (1+k)*tau_nom + g*tau_idle = %.15g, "
                      "tau_nom/eta_nom = %.15g",
                      gTB, t0 / (double)gp.efficiency_nominal);
     }
-    run_case(st, &cl, &h, &rig, G_W0, t0, (double)gp.power_threshold_W,
-             (double)gp.speed_threshold_rad_s,
+    run_case(st, &cl, &h, &rig, G_W0, t0, (double)gp.power_threshold_W, (double)gp.speed_threshold_rad_s,
              (double)rp.load_coulomb_speed_threshold, measured_T);
 }
 
@@ -649,8 +614,7 @@ static void rack_case(matrix_stats *st, int iv, int ib, int id, int ir, int ifl)
     case_label cl;
     const int tooth = (iv + ifl + id) & 1;
     double r_P, measured_T = 300.0;
-    pp.parameterization =
-        tooth ? GS_PARAMETERIZE_TOOTH_PARAMETERS : GS_PARAMETERIZE_PINION_RADIUS;
+    pp.parameterization = tooth ? GS_PARAMETERIZE_TOOTH_PARAMETERS : GS_PARAMETERIZE_PINION_RADIUS;
     pp.pinion_radius_m = R(0.1);
     pp.teeth_count = R(24.0);
     pp.spacing_m = R(0.01);
@@ -674,9 +638,7 @@ static void rack_case(matrix_stats *st, int iv, int ib, int id, int ir, int ifl)
     rp.temperature_source = GS_TEMPERATURE_FROM_INPUT;
 
     /* r_P: the parameter, or N*x/(2*pi) (6.2) */
-    r_P = tooth ? (double)pp.teeth_count * (double)pp.spacing_m /
-                      (2.0 * TEST_PI)
-                : (double)pp.pinion_radius_m;
+    r_P = tooth ? (double)pp.teeth_count * (double)pp.spacing_m / (2.0 * TEST_PI) : (double)pp.pinion_radius_m;
     memset(&h, 0, sizeof h);
     h.rho = rack_sign(pp.rack_directionality) / r_P;
     h.mu_B = (double)pp.pinion_viscous_coefficient;
@@ -684,8 +646,7 @@ static void rack_case(matrix_stats *st, int iv, int ib, int id, int ir, int ifl)
     h.model = pp.friction_model;
     h.eta = (double)pp.efficiency_const;
     if (v->model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY)
-        h.eta = table_eta(pp.temperature_vector_K, pp.efficiency_vector, pp.temperature_count,
-                          (double)R(measured_T));
+        h.eta = table_eta(pp.temperature_vector_K, pp.efficiency_vector, pp.temperature_count, (double)R(measured_T));
     h.coul = (double)rp.load_coulomb_friction;
     h.offset = (double)rp.load_offset;
 
@@ -697,11 +658,10 @@ static void rack_case(matrix_stats *st, int iv, int ib, int id, int ir, int ifl)
     cl.flow = ifl ? FLOW_FOLLOWER_DRIVES : FLOW_BASE_DRIVES;
     cl.param = tooth ? "tooth" : "radius";
     cl.sigma = ((iv + ib + id + ir + ifl) & 1) ? -1.0 : 1.0;
-    if (id)
-        rp.initial_base_speed_rad_s = R(0.5 * h.rho * cl.sigma * R_V0);
+    if (id) rp.initial_base_speed_rad_s = R(0.5 * h.rho * cl.sigma * R_V0);
     INIT_RACK_RIG(&rig, &pp, &rp);
-    run_case(st, &cl, &h, &rig, R_V0, R_F0, (double)pp.power_threshold_W,
-             0.0, (double)rp.load_coulomb_speed_threshold, measured_T);
+    run_case(st, &cl, &h, &rig, R_V0, R_F0, (double)pp.power_threshold_W, 0.0, (double)rp.load_coulomb_speed_threshold,
+             measured_T);
 }
 
 static void rack_cases(matrix_stats *st)
@@ -719,13 +679,10 @@ static void test_settled_matrix(void **state)
     memset(&st, 0, sizeof st);
     gear_cases(&st);
     rack_cases(&st);
-    printf("settled matrix: %d cases (simple gear %d, rack & pinion %d)%s\n", st.cases,
-           N_GEAR_VARIANTS * 16, N_RACK_VARIANTS * 16, st.failures ? "" : ", all settled as derived");
-    printf("worst relative difference from the hand values: rigid %.2g, backlash %.2g\n",
-           worst_rel[0], worst_rel[1]);
-    if (st.failures)
-        fail_msg("settled matrix: %d of %d cases differ from the hand values", st.failures,
-                 st.cases);
+    printf("settled matrix: %d cases (simple gear %d, rack & pinion %d)%s\n", st.cases, N_GEAR_VARIANTS * 16,
+           N_RACK_VARIANTS * 16, st.failures ? "" : ", all settled as derived");
+    printf("worst relative difference from the hand values: rigid %.2g, backlash %.2g\n", worst_rel[0], worst_rel[1]);
+    if (st.failures) fail_msg("settled matrix: %d of %d cases differ from the hand values", st.failures, st.cases);
 }
 
 /* ======================================================================== */
@@ -734,12 +691,12 @@ static void test_settled_matrix(void **state)
  *   gear: g = 2, opposite, J_B = 0.01, J_F = 0.4: J_eff = J_F + g^2*J_B = 0.44
  *   rack: r_P = 0.1, positive, J_B = 0.005, m = 2: m_eff = m + J_B/r_P^2 = 2.5 */
 #define S_COUL 1.0
-#define S_G 2.0
-#define S_JB 0.01
-#define S_JF 0.4
-#define S_RP 0.1
-#define S_RJB 0.005
-#define S_RM 2.0
+#define S_G    2.0
+#define S_JB   0.01
+#define S_JF   0.4
+#define S_RP   0.1
+#define S_RJB  0.005
+#define S_RM   2.0
 
 typedef struct {
     const char *name;
@@ -762,8 +719,8 @@ static const stick_config stick_configs[] = {
 #define N_STICK ((int)(sizeof stick_configs / sizeof stick_configs[0]))
 
 /* Initialises the stick rig; returns J_eff (driven-side referred) and rho. */
-static double stick_rig(test_rig *rig, const stick_config *sc, gs_base_drive drive,
-                        double initial_base_speed, double *rho)
+static double stick_rig(test_rig *rig, const stick_config *sc, gs_base_drive drive, double initial_base_speed,
+                        double *rho)
 {
     gs_rig_params rp = gs_rig_params_default();
     rp.dt_s = R(DT);
@@ -826,14 +783,13 @@ static void test_stick_holds(void **state)
                 print_error("stick (a) %s, load %+.1f below Coulomb %.1f: moves at step %d "
                             "(follower_speed %.6g, base_speed %.6g; after 1000 steps %.6g, %.6g), "
                             "expected exactly 0\n",
-                            stick_configs[ic].name, load, S_COUL, first_bad, bad_w, bad_wb,
-                            (double)out.follower_speed, (double)out.base_speed);
+                            stick_configs[ic].name, load, S_COUL, first_bad, bad_w, bad_wb, (double)out.follower_speed,
+                            (double)out.base_speed);
                 ++bad;
             }
         }
     if (bad)
-        fail_msg("stick (a): %d of %d configurations creep under a load below the Coulomb level",
-                 bad, 2 * N_STICK);
+        fail_msg("stick (a): %d of %d configurations creep under a load below the Coulomb level", bad, 2 * N_STICK);
 }
 
 /* (b) Load 1.5 > Coulomb 1: breaks away and accelerates at (1.5 - 1)/J_eff.
@@ -868,28 +824,25 @@ static void test_breakaway(void **state)
                         worst_k = k;
                     }
                 }
-                if (k == 600)
-                    w600 = (double)out.follower_speed;
+                if (k == 600) w600 = (double)out.follower_speed;
             }
             acc_meas = ((double)out.follower_speed - w600) / (200.0 * DT);
             if (!near_enough(acc_meas, acc, tol, 0.0) ||
                 !near_enough((double)out.follower_acceleration, acc, tol, 0.0) ||
-                !near_enough((double)out.base_speed, rho * (double)out.follower_speed,
-                             sc->backlash ? 1e-3 : TOL_REL, 0.0) ||
+                !near_enough((double)out.base_speed, rho * (double)out.follower_speed, sc->backlash ? 1e-3 : TOL_REL,
+                             0.0) ||
                 worst > tol) {
                 print_error("breakaway (b) %s, load %+.1f, Coulomb %.1f, J_eff %.4g: acceleration "
                             "actual %.10g (output %.10g), expected %.10g; speed at 0.8 s %.10g, "
                             "expected %.10g; base/driven speed %.10g (rho %.6g); worst rel. speed "
                             "error %.3g at step %d\n",
-                            sc->name, load, S_COUL, J, acc_meas, (double)out.follower_acceleration,
-                            acc, (double)out.follower_speed, 800 * DT * acc,
-                            (double)out.base_speed / (double)out.follower_speed, rho, worst,
-                            worst_k);
+                            sc->name, load, S_COUL, J, acc_meas, (double)out.follower_acceleration, acc,
+                            (double)out.follower_speed, 800 * DT * acc,
+                            (double)out.base_speed / (double)out.follower_speed, rho, worst, worst_k);
                 ++bad;
             }
         }
-    if (bad)
-        fail_msg("breakaway (b): %d of %d configurations", bad, 2 * N_STICK);
+    if (bad) fail_msg("breakaway (b): %d of %d configurations", bad, 2 * N_STICK);
 }
 
 /* Steps to the final rest: the first step k such that follower_speed is
@@ -911,10 +864,8 @@ static rest_result run_to_rest(test_rig *rig, int n, const gs_rig_input *in)
     for (k = 1; k <= n; ++k) {
         gs_rig_step(&rig->c, &rig->s, in, &out);
         if (is_zero((double)out.follower_speed)) {
-            if (r.k_rest < 0)
-                r.k_rest = k;
-            if (r.k_first_zero < 0)
-                r.k_first_zero = k;
+            if (r.k_rest < 0) r.k_rest = k;
+            if (r.k_first_zero < 0) r.k_first_zero = k;
         } else {
             r.k_rest = -1;
         }
@@ -924,14 +875,12 @@ static rest_result run_to_rest(test_rig *rig, int n, const gs_rig_input *in)
     return r;
 }
 
-static void report_rest(char *buf, size_t n, const char *name, const rest_result *r,
-                        double t_hand)
+static void report_rest(char *buf, size_t n, const char *name, const rest_result *r, double t_hand)
 {
     if (r->k_rest >= 0)
         snprintf(buf, n, "  %-34s %.3f s (hand %.3f s)", name, r->k_rest * DT, t_hand);
     else
-        snprintf(buf, n, "  %-34s never exactly at rest (hand %.3f s; speed at the end %.3g)",
-                 name, t_hand, r->w_end);
+        snprintf(buf, n, "  %-34s never exactly at rest (hand %.3f s; speed at the end %.3g)", name, t_hand, r->w_end);
 }
 
 /* (c), (d) Unpowered, started at omega_B0 = 1 rad/s: coasts to rest in
@@ -970,8 +919,7 @@ static void test_coast_to_rest(void **state)
     printf("time to rest, unpowered from omega_B = 1 rad/s (hand J_eff*|omega_F0|/F_C):\n");
     for (ic = 0; ic < N_STICK; ++ic)
         printf("%s\n", lines[ic]);
-    if (bad)
-        fail_msg("coast to rest (c/d): %d of %d configurations", bad, N_STICK);
+    if (bad) fail_msg("coast to rest (c/d): %d of %d configurations", bad, N_STICK);
 }
 
 /* (e) Speed-driven base with backlash: the base carries the follower against
@@ -1005,8 +953,8 @@ static void test_speed_driven_stop(void **state)
         r = run_to_rest(&rig, 500, &stop);
         report_rest(lines[ic], sizeof lines[ic], cfg[ic].name, &r, t_hand);
         tol = 0.05 * t_hand + 2.0 * DT;
-        if (!near_enough(w_carried, wF0, 1e-6 > TOL_REL ? 1e-6 : TOL_REL, 0.0) ||
-            r.k_rest < 0 || fabs(r.k_rest * DT - t_hand) > tol) {
+        if (!near_enough(w_carried, wF0, 1e-6 > TOL_REL ? 1e-6 : TOL_REL, 0.0) || r.k_rest < 0 ||
+            fabs(r.k_rest * DT - t_hand) > tol) {
             print_error("speed-driven stop (e) %s: carried at %.9g (expected %.9g); %s; "
                         "expected exactly at rest from %.4f s (+- %.4f s) on; first exact "
                         "zero at step %d\n",
@@ -1014,19 +962,15 @@ static void test_speed_driven_stop(void **state)
             ++bad;
         }
     }
-    printf("time to rest after the base stops (hand J_F*|omega_F0|/F_C):\n%s\n%s\n", lines[0],
-           lines[1]);
-    if (bad)
-        fail_msg("speed-driven stop (e): %d of 2 configurations", bad);
+    printf("time to rest after the base stops (hand J_F*|omega_F0|/F_C):\n%s\n%s\n", lines[0], lines[1]);
+    if (bad) fail_msg("speed-driven stop (e): %d of 2 configurations", bad);
 }
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_settled_matrix),
-        cmocka_unit_test(test_stick_holds),
-        cmocka_unit_test(test_breakaway),
-        cmocka_unit_test(test_coast_to_rest),
+        cmocka_unit_test(test_settled_matrix),    cmocka_unit_test(test_stick_holds),
+        cmocka_unit_test(test_breakaway),         cmocka_unit_test(test_coast_to_rest),
         cmocka_unit_test(test_speed_driven_stop),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -105,8 +105,7 @@ static void test_rack_temperature_table(void **state)
         double eta = etas[i], r = (double)pp.pinion_radius_m;
         int j;
         for (j = 0; j < 3; ++j) /* the table as stored in gs_real */
-            if (fabs(etas[i] - (double)pp.efficiency_vector[j]) < 1e-6)
-                eta = (double)pp.efficiency_vector[j];
+            if (fabs(etas[i] - (double)pp.efficiency_vector[j]) < 1e-6) eta = (double)pp.efficiency_vector[j];
         rp.temperature_source = GS_TEMPERATURE_FROM_INPUT;
         in.measured_temperature = R(temps[i]);
         INIT_RACK_RIG(&rig, &pp, &rp);
@@ -180,8 +179,7 @@ static void test_temperature_load_table_bilinear(void **state)
             const double TF = probes[i].load * g; /* load = |T_F|/g */
             const double eta = probes[i].eta;
             ASSERT_NEAR(rig_base_torque_at(&gp, probes[i].T, -TF), TF / (eta * g), TOL_REL, 0.0);
-            ASSERT_NEAR(rig_base_torque_at(&gp, probes[i].T, TF),
-                        -(TF - TF * (1.0 / eta - 1.0)) / g, TOL_REL, 0.0);
+            ASSERT_NEAR(rig_base_torque_at(&gp, probes[i].T, TF), -(TF - TF * (1.0 / eta - 1.0)) / g, TOL_REL, 0.0);
         }
     }
 }
@@ -296,8 +294,7 @@ static void test_heat_path_steady_state_temperature_feedback(void **state)
     }
     {
         /* slack: Euler stall band R*C*ulp/dt (negligible in double) */
-        const double tol = TOL_ACC + 4.0 * Rth * (double)gp.thermal_mass_J_K * GS_EPS * 512.0 /
-                                         (double)rp.dt_s;
+        const double tol = TOL_ACC + 4.0 * Rth * (double)gp.thermal_mass_J_K * GS_EPS * 512.0 / (double)rp.dt_s;
         ASSERT_NEAR(out.temperature, T, 0.0, tol);
         /* self-consistency of the balance at the end: T = T_amb + P*R_th */
         ASSERT_NEAR(out.temperature, Tamb + (double)out.loss_power * Rth, 0.0, tol);

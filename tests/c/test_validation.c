@@ -62,10 +62,10 @@ static void use_backlash(gs_simple_gear_params *p)
     p->backlash.initial_position_m = R(0.0);
 }
 
-#define GM(name, body)                           \
-    static void name(gs_simple_gear_params *p)   \
-    {                                            \
-        body;                                    \
+#define GM(name, body)                         \
+    static void name(gs_simple_gear_params *p) \
+    {                                          \
+        body;                                  \
     }
 
 GM(g_nothing, (void)p)
@@ -134,22 +134,18 @@ GM(g_bl_K_inf, use_backlash(p); p->backlash.stiffness_N_m = R(INFINITY))
 GM(g_bl_D_neg, use_backlash(p); p->backlash.damping_N_s_m = R(-1.0))
 GM(g_bl_x0_high, use_backlash(p); p->backlash.initial_position_m = R(0.6e-3))
 GM(g_bl_x0_low, use_backlash(p); p->backlash.initial_position_m = R(-0.6e-3))
-GM(g_bl_model_bad,
-   use_backlash(p); p->backlash.hard_stop_model = BAD_ENUM(gs_hard_stop_model, 7))
-GM(g_bl_vth_zero, use_backlash(p); p->backlash.lock_enabled = 1;
-   p->backlash.contact_speed_threshold_m_s = R(0.0))
-GM(g_bl_fth_neg, use_backlash(p); p->backlash.lock_enabled = 1;
-   p->backlash.contact_release_force_N = R(-1.0))
+GM(g_bl_model_bad, use_backlash(p); p->backlash.hard_stop_model = BAD_ENUM(gs_hard_stop_model, 7))
+GM(g_bl_vth_zero, use_backlash(p); p->backlash.lock_enabled = 1; p->backlash.contact_speed_threshold_m_s = R(0.0))
+GM(g_bl_fth_neg, use_backlash(p); p->backlash.lock_enabled = 1; p->backlash.contact_release_force_N = R(-1.0))
 /* valid */
 GM(v_eta_one, use_constant(p); p->efficiency_const = R(1.0))
-GM(v_inactive_eta, p->friction_model = GS_FRICTION_NONE; p->efficiency_const = R(5.0);
-   p->power_threshold_W = R(-1.0))
+GM(v_inactive_eta, p->friction_model = GS_FRICTION_NONE; p->efficiency_const = R(5.0); p->power_threshold_W = R(-1.0))
 GM(v_inactive_tables, use_constant(p); p->temperature_count = 0; p->load_count = 0)
 /* thermal_mass only: docs/model.md reports initial_temperature as the
  * (constant) temperature of the other models, so it stays validated */
 GM(v_inactive_thermal, use_load(p); p->thermal_mass_J_K = R(0.0))
-GM(v_inactive_load_params, use_temp(p); p->idle_torque_Nm = R(-1.0);
-   p->efficiency_nominal = R(2.0); p->speed_threshold_rad_s = R(0.0))
+GM(v_inactive_load_params, use_temp(p); p->idle_torque_Nm = R(-1.0); p->efficiency_nominal = R(2.0);
+   p->speed_threshold_rad_s = R(0.0))
 GM(v_inactive_backlash, p->backlash.enabled = 0; p->backlash.linear_backlash_m = R(-1.0);
    p->backlash.stiffness_N_m = R(0.0))
 GM(v_full_d_zero, use_backlash(p); p->backlash.hard_stop_model = GS_HARD_STOP_FULL_DAMPED;
@@ -157,22 +153,19 @@ GM(v_full_d_zero, use_backlash(p); p->backlash.hard_stop_model = GS_HARD_STOP_FU
 GM(v_D_zero, use_backlash(p); p->backlash.damping_N_s_m = R(0.0))
 GM(v_x0_high_edge, use_backlash(p); p->backlash.initial_position_m = R(0.5e-3))
 GM(v_x0_low_edge, use_backlash(p); p->backlash.initial_position_m = R(-0.5e-3))
-GM(v_lock_off, use_backlash(p); p->backlash.lock_enabled = 0;
-   p->backlash.contact_speed_threshold_m_s = R(0.0);
+GM(v_lock_off, use_backlash(p); p->backlash.lock_enabled = 0; p->backlash.contact_speed_threshold_m_s = R(0.0);
    p->backlash.contact_release_force_N = R(-1.0))
-GM(v_lock_on, use_backlash(p); p->backlash.lock_enabled = 1;
-   p->backlash.contact_speed_threshold_m_s = R(1e-3);
+GM(v_lock_on, use_backlash(p); p->backlash.lock_enabled = 1; p->backlash.contact_speed_threshold_m_s = R(1e-3);
    p->backlash.contact_release_force_N = R(0.0))
 GM(v_load_default, use_load(p))
 GM(v_temp_default, use_temp(p))
 GM(v_2d, use_2d(p))
-GM(v_table_max, int i; use_temp(p); p->temperature_count = GS_TABLE_MAX;
-   for (i = 0; i < GS_TABLE_MAX; ++i) {
-       p->temperature_vector_K[i] = R(250.0 + 10.0 * i);
-       p->efficiency_vector[i] = R(1.0 - 0.01 * i);
-   })
-GM(v_unused_entries, use_temp(p); p->efficiency_vector[5] = R(0.0);
-   p->temperature_vector_K[5] = R(NAN))
+GM(
+    v_table_max, int i; use_temp(p); p->temperature_count = GS_TABLE_MAX; for (i = 0; i < GS_TABLE_MAX; ++i) {
+        p->temperature_vector_K[i] = R(250.0 + 10.0 * i);
+        p->efficiency_vector[i] = R(1.0 - 0.01 * i);
+    })
+GM(v_unused_entries, use_temp(p); p->efficiency_vector[5] = R(0.0); p->temperature_vector_K[5] = R(NAN))
 GM(v_k_zero_edge, use_load(p); p->teeth_ratio = R(2.0); p->nominal_output_torque_Nm = R(1.0);
    p->efficiency_nominal = R(0.8); p->idle_torque_Nm = R(0.1)) /* k = 0.25 - 0.2 > 0 */
 GM(v_visc_zero, p->viscous_coefficients[0] = R(0.0); p->viscous_coefficients[1] = R(0.0))
@@ -193,16 +186,12 @@ static const gear_case gear_cases[] = {
     {"efficiency_const > 1", g_eta_big, GS_E_EFFICIENCY_RANGE, "efficiency_const", NULL, GS_OK},
     {"efficiency_const NaN", g_eta_nan, GS_E_NOT_FINITE, "efficiency_const", NULL, GS_OK},
     {"power_threshold 0", g_pth_zero, GS_E_NOT_POSITIVE, "power_threshold", NULL, GS_OK},
-    {"power_threshold < 0 (temperature)", g_pth_temp, GS_E_NOT_POSITIVE, "power_threshold", NULL,
-     GS_OK},
+    {"power_threshold < 0 (temperature)", g_pth_temp, GS_E_NOT_POSITIVE, "power_threshold", NULL, GS_OK},
     {"power_threshold NaN", g_pth_nan, GS_E_NOT_FINITE, "power_threshold", NULL, GS_OK},
     {"idle_torque < 0", g_idle_neg, GS_E_NEGATIVE, "idle_torque", NULL, GS_OK},
-    {"nominal_output_torque 0", g_nom_zero, GS_E_NOT_POSITIVE, "nominal_output_torque", NULL,
-     GS_OK},
-    {"efficiency_nominal 1", g_enom_one, GS_E_NOMINAL_EFFICIENCY, "efficiency_nominal", NULL,
-     GS_OK},
-    {"efficiency_nominal 0", g_enom_zero, GS_E_NOMINAL_EFFICIENCY, "efficiency_nominal", NULL,
-     GS_OK},
+    {"nominal_output_torque 0", g_nom_zero, GS_E_NOT_POSITIVE, "nominal_output_torque", NULL, GS_OK},
+    {"efficiency_nominal 1", g_enom_one, GS_E_NOMINAL_EFFICIENCY, "efficiency_nominal", NULL, GS_OK},
+    {"efficiency_nominal 0", g_enom_zero, GS_E_NOMINAL_EFFICIENCY, "efficiency_nominal", NULL, GS_OK},
     /* k < 0 (eq. 2.5): physics.md lists the rule under efficiency_nominal,
      * types.h names it after the idle torque; either name is accepted */
     {"k < 0", g_k_neg, GS_E_IDLE_TORQUE_TOO_LARGE, "idle_torque", "efficiency_nominal", GS_OK},
@@ -211,10 +200,8 @@ static const gear_case gear_cases[] = {
     {"temperature_count 1", g_tcount_1, GS_E_TABLE_LENGTH, "temperature_vector", NULL, GS_OK},
     {"temperature_count 0", g_tcount_0, GS_E_TABLE_LENGTH, "temperature_vector", NULL, GS_OK},
     {"temperature_count 11", g_tcount_11, GS_E_TABLE_LENGTH, "temperature_vector", NULL, GS_OK},
-    {"temperature_vector equal", g_t_equal, GS_E_TABLE_NOT_INCREASING, "temperature_vector", NULL,
-     GS_OK},
-    {"temperature_vector decreasing", g_t_dec, GS_E_TABLE_NOT_INCREASING, "temperature_vector",
-     NULL, GS_OK},
+    {"temperature_vector equal", g_t_equal, GS_E_TABLE_NOT_INCREASING, "temperature_vector", NULL, GS_OK},
+    {"temperature_vector decreasing", g_t_dec, GS_E_TABLE_NOT_INCREASING, "temperature_vector", NULL, GS_OK},
     {"temperature_vector NaN", g_t_nan, GS_E_NOT_FINITE, "temperature_vector", NULL, GS_OK},
     {"efficiency_vector 0", g_evec_zero, GS_E_EFFICIENCY_RANGE, "efficiency_vector", NULL, GS_OK},
     {"efficiency_vector > 1", g_evec_big, GS_E_EFFICIENCY_RANGE, "efficiency_vector", NULL, GS_OK},
@@ -225,16 +212,13 @@ static const gear_case gear_cases[] = {
     {"load_count 1", g_2d_lcount, GS_E_TABLE_LENGTH, "load_vector", NULL, GS_OK},
     {"load_vector equal", g_2d_lequal, GS_E_TABLE_NOT_INCREASING, "load_vector", NULL, GS_OK},
     {"load_vector < 0", g_2d_lneg, GS_E_NEGATIVE, "load_vector", NULL, GS_OK},
-    {"efficiency_matrix 0", g_2d_mat_zero, GS_E_EFFICIENCY_RANGE, "efficiency_matrix", NULL,
-     GS_OK},
-    {"efficiency_matrix > 1", g_2d_mat_big, GS_E_EFFICIENCY_RANGE, "efficiency_matrix", NULL,
-     GS_OK},
+    {"efficiency_matrix 0", g_2d_mat_zero, GS_E_EFFICIENCY_RANGE, "efficiency_matrix", NULL, GS_OK},
+    {"efficiency_matrix > 1", g_2d_mat_big, GS_E_EFFICIENCY_RANGE, "efficiency_matrix", NULL, GS_OK},
     {"efficiency_matrix NaN", g_2d_mat_nan, GS_E_NOT_FINITE, "efficiency_matrix", NULL, GS_OK},
     {"efficiency_matrix subnormal", g_2d_mat_tiny, GS_E_MAGNITUDE, "efficiency_matrix", NULL, GS_OK},
     {"efficiency_const subnormal", g_eta_tiny, GS_E_MAGNITUDE, "efficiency_const", NULL, GS_OK},
     {"2-D temperature_count 1", g_2d_tcount, GS_E_TABLE_LENGTH, "temperature_vector", NULL, GS_OK},
-    {"2-D temperature_vector decreasing", g_2d_t_dec, GS_E_TABLE_NOT_INCREASING,
-     "temperature_vector", NULL, GS_OK},
+    {"2-D temperature_vector decreasing", g_2d_t_dec, GS_E_TABLE_NOT_INCREASING, "temperature_vector", NULL, GS_OK},
     {"2-D thermal_mass < 0", g_2d_cmass, GS_E_NOT_POSITIVE, "thermal_mass", NULL, GS_OK},
     {"viscous mu_B < 0", g_visc_b, GS_E_NEGATIVE, "viscous_coefficients", NULL, GS_OK},
     {"viscous mu_F < 0", g_visc_f, GS_E_NEGATIVE, "viscous_coefficients", NULL, GS_OK},
@@ -243,26 +227,20 @@ static const gear_case gear_cases[] = {
     {"linear_backlash NaN", g_bl_b_nan, GS_E_NOT_FINITE, "linear_backlash", NULL, GS_OK},
     {"base_radius 0", g_bl_rb_zero, GS_E_NOT_POSITIVE, "base_radius", NULL, GS_OK},
     {"transition_region 0", g_bl_d_zero, GS_E_TRANSITION_REGION, "transition_region", NULL, GS_OK},
-    {"transition_region < 0", g_bl_d_neg, GS_E_TRANSITION_REGION, "transition_region", NULL,
-     GS_OK},
+    {"transition_region < 0", g_bl_d_neg, GS_E_TRANSITION_REGION, "transition_region", NULL, GS_OK},
     {"stiffness 0", g_bl_K_zero, GS_E_NOT_POSITIVE, "stiffness", NULL, GS_OK},
     {"stiffness inf", g_bl_K_inf, GS_E_NOT_FINITE, "stiffness", NULL, GS_OK},
     {"damping < 0", g_bl_D_neg, GS_E_NEGATIVE, "damping", NULL, GS_OK},
-    {"initial_backlash_position > b/2", g_bl_x0_high, GS_E_BACKLASH_POSITION,
-     "initial_backlash_position", NULL, GS_OK},
-    {"initial_backlash_position < -b/2", g_bl_x0_low, GS_E_BACKLASH_POSITION,
-     "initial_backlash_position", NULL, GS_OK},
+    {"initial_backlash_position > b/2", g_bl_x0_high, GS_E_BACKLASH_POSITION, "initial_backlash_position", NULL, GS_OK},
+    {"initial_backlash_position < -b/2", g_bl_x0_low, GS_E_BACKLASH_POSITION, "initial_backlash_position", NULL, GS_OK},
     {"hard_stop_model bad", g_bl_model_bad, GS_E_OPTION, "hard_stop_model", NULL, GS_OK},
-    {"contact_speed_threshold 0 (lock)", g_bl_vth_zero, GS_E_NOT_POSITIVE,
-     "contact_speed_threshold", NULL, GS_OK},
-    {"contact_release_force < 0 (lock)", g_bl_fth_neg, GS_E_NEGATIVE, "contact_release_force",
-     NULL, GS_OK},
+    {"contact_speed_threshold 0 (lock)", g_bl_vth_zero, GS_E_NOT_POSITIVE, "contact_speed_threshold", NULL, GS_OK},
+    {"contact_release_force < 0 (lock)", g_bl_fth_neg, GS_E_NEGATIVE, "contact_release_force", NULL, GS_OK},
     {"efficiency 1 allowed", v_eta_one, GS_OK, "", NULL, GS_OK},
     {"inactive efficiency not validated", v_inactive_eta, GS_OK, "", NULL, GS_OK},
     {"inactive tables not validated", v_inactive_tables, GS_OK, "", NULL, GS_OK},
     {"inactive thermal parameters not validated", v_inactive_thermal, GS_OK, "", NULL, GS_OK},
-    {"inactive load-model parameters not validated", v_inactive_load_params, GS_OK, "", NULL,
-     GS_OK},
+    {"inactive load-model parameters not validated", v_inactive_load_params, GS_OK, "", NULL, GS_OK},
     {"disabled backlash not validated", v_inactive_backlash, GS_OK, "", NULL, GS_OK},
     {"full models ignore transition_region", v_full_d_zero, GS_OK, "", NULL, GS_OK},
     {"damping 0 allowed", v_D_zero, GS_OK, "", NULL, GS_OK},
@@ -279,9 +257,8 @@ static const gear_case gear_cases[] = {
     {"viscous 0", v_visc_zero, GS_OK, "", NULL, GS_OK},
 };
 
-static void check_result(const char *what, const char *label, gs_status got, const gs_error *err,
-                         gs_status want, gs_status alt_want, const char *param,
-                         const char *alt_param)
+static void check_result(const char *what, const char *label, gs_status got, const gs_error *err, gs_status want,
+                         gs_status alt_want, const char *param, const char *alt_param)
 {
     int ok_status = got == want || (alt_want != GS_OK && got == alt_want);
     int ok_param;
@@ -289,18 +266,15 @@ static void check_result(const char *what, const char *label, gs_status got, con
         print_error("%s [%s]: err.parameter or err.message is NULL\n", what, label);
         fail();
     }
-    ok_param = strcmp(err->parameter, param) == 0 ||
-               (alt_param != NULL && strcmp(err->parameter, alt_param) == 0);
+    ok_param = strcmp(err->parameter, param) == 0 || (alt_param != NULL && strcmp(err->parameter, alt_param) == 0);
     if (!ok_status || !ok_param || err->status != got) {
         print_error("%s [%s]: got status %d (%s) parameter '%s' (err.status %d), expected %d (%s) "
                     "parameter '%s'%s%s\n",
-                    what, label, (int)got, gs_status_str(got), err->parameter, (int)err->status,
-                    (int)want, gs_status_str(want), param, alt_param ? " or " : "",
-                    alt_param ? alt_param : "");
+                    what, label, (int)got, gs_status_str(got), err->parameter, (int)err->status, (int)want,
+                    gs_status_str(want), param, alt_param ? " or " : "", alt_param ? alt_param : "");
         fail();
     }
-    if (got != GS_OK)
-        assert_true(strlen(err->message) > 0);
+    if (got != GS_OK) assert_true(strlen(err->message) > 0);
 }
 
 static void test_gear_rules(void **state)
@@ -320,10 +294,8 @@ static void test_gear_rules(void **state)
         err.parameter = "garbage";
         err.message = NULL;
         st = gs_simple_gear_init(&gear.c, &gear.s, &p, &err);
-        check_result("gs_simple_gear_init", c->label, st, &err, c->status, c->alt_status, c->param,
-                     c->alt_param);
-        if (st != GS_OK)
-            assert_memory_equal(&gear, &before, sizeof gear); /* left unchanged */
+        check_result("gs_simple_gear_init", c->label, st, &err, c->status, c->alt_status, c->param, c->alt_param);
+        if (st != GS_OK) assert_memory_equal(&gear, &before, sizeof gear); /* left unchanged */
         /* err may be NULL */
         assert_int_equal(gs_simple_gear_init(&gear.c, &gear.s, &p, NULL), st);
         /* the gear rig validates the block the same way */
@@ -332,8 +304,7 @@ static void test_gear_rules(void **state)
             test_rig rig;
             err.parameter = "garbage";
             st = gs_rig_init_gear(&rig.c, &rig.s, &p, &rp, &err);
-            check_result("gs_rig_init_gear", c->label, st, &err, c->status, c->alt_status,
-                         c->param, c->alt_param);
+            check_result("gs_rig_init_gear", c->label, st, &err, c->status, c->alt_status, c->param, c->alt_param);
         }
     }
 }
@@ -348,10 +319,10 @@ typedef struct {
     const char *param;
 } rack_case;
 
-#define RM(name, body)                           \
-    static void name(gs_rack_pinion_params *p)   \
-    {                                            \
-        body;                                    \
+#define RM(name, body)                         \
+    static void name(gs_rack_pinion_params *p) \
+    {                                          \
+        body;                                  \
     }
 
 static void rack_backlash(gs_rack_pinion_params *p)
@@ -366,37 +337,28 @@ RM(r_nothing, (void)p)
 RM(r_param_bad, p->parameterization = BAD_ENUM(gs_rack_parameterization, 3))
 RM(r_radius_zero, p->pinion_radius_m = R(0.0))
 RM(r_radius_nan, p->pinion_radius_m = R(NAN))
-RM(r_teeth_zero, p->parameterization = GS_PARAMETERIZE_TOOTH_PARAMETERS;
-   p->teeth_count = R(0.0))
-RM(r_spacing_zero, p->parameterization = GS_PARAMETERIZE_TOOTH_PARAMETERS;
-   p->spacing_m = R(-0.005))
+RM(r_teeth_zero, p->parameterization = GS_PARAMETERIZE_TOOTH_PARAMETERS; p->teeth_count = R(0.0))
+RM(r_spacing_zero, p->parameterization = GS_PARAMETERIZE_TOOTH_PARAMETERS; p->spacing_m = R(-0.005))
 RM(r_dir_bad, p->rack_directionality = BAD_ENUM(gs_rack_direction, 2))
 RM(r_fric_load, p->friction_model = GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY)
 RM(r_fric_2d, p->friction_model = GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY)
 RM(r_fric_bad, p->friction_model = BAD_ENUM(gs_friction_model, 11))
 RM(r_eta_zero, p->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY; p->efficiency_const = R(0.0))
 RM(r_eta_big, p->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY; p->efficiency_const = R(1.5))
-RM(r_pth_zero, p->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY;
-   p->power_threshold_W = R(0.0))
-RM(r_tcount, p->friction_model = GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY;
-   p->temperature_count = 1)
-RM(r_t_dec, p->friction_model = GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY;
-   p->temperature_vector_K[2] = R(300.0))
-RM(r_evec, p->friction_model = GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY;
-   p->efficiency_vector[2] = R(1.5))
+RM(r_pth_zero, p->friction_model = GS_FRICTION_CONSTANT_EFFICIENCY; p->power_threshold_W = R(0.0))
+RM(r_tcount, p->friction_model = GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY; p->temperature_count = 1)
+RM(r_t_dec, p->friction_model = GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY; p->temperature_vector_K[2] = R(300.0))
+RM(r_evec, p->friction_model = GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY; p->efficiency_vector[2] = R(1.5))
 RM(r_visc_p, p->pinion_viscous_coefficient = R(-1.0))
 RM(r_visc_r, p->rack_viscous_coefficient = R(-1.0))
 RM(r_visc_nan, p->rack_viscous_coefficient = R(NAN))
-RM(r_cmass, p->friction_model = GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY;
-   p->thermal_mass_J_K = R(0.0))
-RM(r_t0, p->friction_model = GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY;
-   p->initial_temperature_K = R(0.0))
+RM(r_cmass, p->friction_model = GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY; p->thermal_mass_J_K = R(0.0))
+RM(r_t0, p->friction_model = GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY; p->initial_temperature_K = R(0.0))
 RM(r_bl_b, rack_backlash(p); p->backlash.linear_backlash_m = R(0.0))
 RM(r_bl_K, rack_backlash(p); p->backlash.stiffness_N_m = R(-1.0))
 RM(r_bl_x0, rack_backlash(p); p->backlash.initial_position_m = R(1e-3))
 RM(r_bl_d, rack_backlash(p); p->backlash.transition_region_m = R(0.0))
-RM(v_r_tooth_ignores_radius, p->parameterization = GS_PARAMETERIZE_TOOTH_PARAMETERS;
-   p->pinion_radius_m = R(0.0))
+RM(v_r_tooth_ignores_radius, p->parameterization = GS_PARAMETERIZE_TOOTH_PARAMETERS; p->pinion_radius_m = R(0.0))
 RM(v_r_radius_ignores_teeth, p->teeth_count = R(0.0); p->spacing_m = R(0.0))
 RM(v_r_backlash_no_base_radius, rack_backlash(p); p->backlash.base_radius_m = R(0.0))
 RM(v_r_inactive_eta, p->efficiency_const = R(7.0))
@@ -426,8 +388,7 @@ static const rack_case rack_cases[] = {
     {"initial_temperature 0", r_t0, GS_E_NOT_POSITIVE, "initial_temperature"},
     {"linear_backlash 0", r_bl_b, GS_E_NOT_POSITIVE, "linear_backlash"},
     {"stiffness < 0", r_bl_K, GS_E_NOT_POSITIVE, "stiffness"},
-    {"initial_backlash_position > b/2", r_bl_x0, GS_E_BACKLASH_POSITION,
-     "initial_backlash_position"},
+    {"initial_backlash_position > b/2", r_bl_x0, GS_E_BACKLASH_POSITION, "initial_backlash_position"},
     {"transition_region 0", r_bl_d, GS_E_TRANSITION_REGION, "transition_region"},
     {"tooth parameterization ignores pinion_radius", v_r_tooth_ignores_radius, GS_OK, ""},
     {"radius parameterization ignores teeth", v_r_radius_ignores_teeth, GS_OK, ""},
@@ -454,8 +415,7 @@ static void test_rack_rules(void **state)
         err.parameter = "garbage";
         st = gs_rack_pinion_init(&rp.c, &rp.s, &p, &err);
         check_result("gs_rack_pinion_init", c->label, st, &err, c->status, GS_OK, c->param, NULL);
-        if (st != GS_OK)
-            assert_memory_equal(&rp, &before, sizeof rp);
+        if (st != GS_OK) assert_memory_equal(&rp, &before, sizeof rp);
         assert_int_equal(gs_rack_pinion_init(&rp.c, &rp.s, &p, NULL), st);
         err.parameter = "garbage";
         st = gs_rig_init_rack(&rig.c, &rig.s, &p, &rigp, &err);
@@ -475,10 +435,10 @@ typedef struct {
     const char *rack_param; /* name with the rack rig */
 } rig_case;
 
-#define RGM(name, body)                  \
-    static void name(gs_rig_params *p)   \
-    {                                    \
-        body;                            \
+#define RGM(name, body)                \
+    static void name(gs_rig_params *p) \
+    {                                  \
+        body;                          \
     }
 
 RGM(rg_nothing, (void)p)
@@ -520,28 +480,21 @@ static const rig_case rig_cases[] = {
     {"driven inertia 0", rg_J_zero, GS_E_NOT_POSITIVE, GS_OK, "follower_inertia", "rack_mass"},
     {"driven inertia < 0", rg_J_neg, GS_E_NOT_POSITIVE, GS_OK, "follower_inertia", "rack_mass"},
     {"driven inertia NaN", rg_J_nan, GS_E_NOT_FINITE, GS_OK, "follower_inertia", "rack_mass"},
-    {"base_inertia 0, torque-driven", rg_JB_torque_zero, GS_E_NOT_POSITIVE, GS_OK, "base_inertia",
-     "base_inertia"},
-    {"base_inertia < 0, speed-driven", rg_JB_speed_neg, GS_E_NEGATIVE, GS_OK, "base_inertia",
-     "base_inertia"},
-    {"load_coulomb_friction < 0", rg_coul_neg, GS_E_NEGATIVE, GS_OK, "load_coulomb_friction",
-     "load_coulomb_friction"},
-    {"load_coulomb_speed_threshold 0", rg_coulth_zero, GS_E_NOT_POSITIVE, GS_OK,
-     "load_coulomb_speed_threshold", "load_coulomb_speed_threshold"},
-    {"thermal_resistance 0 with heat path", rg_rth_zero, GS_E_NOT_POSITIVE, GS_OK,
-     "thermal_resistance", "thermal_resistance"},
-    {"accel_filter_time_constant < 0", rg_filter_neg, GS_E_NEGATIVE, GS_OK,
-     "accel_filter_time_constant", "accel_filter_time_constant"},
-    {"contact_substeps < 0", rg_sub_neg, GS_E_SUBSTEPS, GS_OK, "contact_substeps",
-     "contact_substeps"},
-    {"contact_substeps > max", rg_sub_big, GS_E_SUBSTEPS, GS_OK, "contact_substeps",
-     "contact_substeps"},
+    {"base_inertia 0, torque-driven", rg_JB_torque_zero, GS_E_NOT_POSITIVE, GS_OK, "base_inertia", "base_inertia"},
+    {"base_inertia < 0, speed-driven", rg_JB_speed_neg, GS_E_NEGATIVE, GS_OK, "base_inertia", "base_inertia"},
+    {"load_coulomb_friction < 0", rg_coul_neg, GS_E_NEGATIVE, GS_OK, "load_coulomb_friction", "load_coulomb_friction"},
+    {"load_coulomb_speed_threshold 0", rg_coulth_zero, GS_E_NOT_POSITIVE, GS_OK, "load_coulomb_speed_threshold",
+     "load_coulomb_speed_threshold"},
+    {"thermal_resistance 0 with heat path", rg_rth_zero, GS_E_NOT_POSITIVE, GS_OK, "thermal_resistance",
+     "thermal_resistance"},
+    {"accel_filter_time_constant < 0", rg_filter_neg, GS_E_NEGATIVE, GS_OK, "accel_filter_time_constant",
+     "accel_filter_time_constant"},
+    {"contact_substeps < 0", rg_sub_neg, GS_E_SUBSTEPS, GS_OK, "contact_substeps", "contact_substeps"},
+    {"contact_substeps > max", rg_sub_big, GS_E_SUBSTEPS, GS_OK, "contact_substeps", "contact_substeps"},
     {"base_drive bad", rg_drive_bad, GS_E_OPTION, GS_OK, "base_drive", "base_drive"},
-    {"temperature_source bad", rg_tsrc_bad, GS_E_OPTION, GS_OK, "temperature_source",
-     "temperature_source"},
+    {"temperature_source bad", rg_tsrc_bad, GS_E_OPTION, GS_OK, "temperature_source", "temperature_source"},
     {"load_offset NaN", rg_offset_nan, GS_E_NOT_FINITE, GS_OK, "load_offset", "load_offset"},
-    {"initial_base_speed NaN", rg_w0_nan, GS_E_NOT_FINITE, GS_OK, "initial_base_speed",
-     "initial_base_speed"},
+    {"initial_base_speed NaN", rg_w0_nan, GS_E_NOT_FINITE, GS_OK, "initial_base_speed", "initial_base_speed"},
     {"base_inertia 0, speed-driven", vg_JB_speed_zero, GS_OK, GS_OK, "", ""},
     {"adiabatic ignores thermal_resistance", vg_no_heat_path, GS_OK, GS_OK, "", ""},
     {"contact_substeps = max", vg_sub_max, GS_OK, GS_OK, "", ""},
@@ -568,15 +521,12 @@ static void test_rig_rules(void **state)
         before = rig;
         err.parameter = "garbage";
         st = gs_rig_init_gear(&rig.c, &rig.s, &gp, &rp, &err);
-        check_result("gs_rig_init_gear", c->label, st, &err, c->status, c->alt_status,
-                     c->gear_param, NULL);
-        if (st != GS_OK)
-            assert_memory_equal(&rig, &before, sizeof rig);
+        check_result("gs_rig_init_gear", c->label, st, &err, c->status, c->alt_status, c->gear_param, NULL);
+        if (st != GS_OK) assert_memory_equal(&rig, &before, sizeof rig);
         assert_int_equal(gs_rig_init_gear(&rig.c, &rig.s, &gp, &rp, NULL), st);
         err.parameter = "garbage";
         st = gs_rig_init_rack(&rig.c, &rig.s, &pp, &rp, &err);
-        check_result("gs_rig_init_rack", c->label, st, &err, c->status, c->alt_status,
-                     c->rack_param, NULL);
+        check_result("gs_rig_init_rack", c->label, st, &err, c->status, c->alt_status, c->rack_param, NULL);
     }
 }
 
@@ -623,8 +573,7 @@ static void test_status_strings(void **state)
     for (c = GS_STATUS_MIN; c <= GS_OK; ++c)
         for (d = c + 1; d <= GS_OK; ++d)
             if (strcmp(gs_status_str((gs_status)c), gs_status_str((gs_status)d)) == 0) {
-                print_error("statuses %d and %d share the message '%s'\n", c, d,
-                            gs_status_str((gs_status)c));
+                print_error("statuses %d and %d share the message '%s'\n", c, d, gs_status_str((gs_status)c));
                 fail();
             }
 }
@@ -713,9 +662,8 @@ static void test_defaults(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_gear_rules),   cmocka_unit_test(test_rack_rules),
-        cmocka_unit_test(test_rig_rules),    cmocka_unit_test(test_null_pointers),
-        cmocka_unit_test(test_status_strings), cmocka_unit_test(test_defaults),
+        cmocka_unit_test(test_gear_rules),    cmocka_unit_test(test_rack_rules),     cmocka_unit_test(test_rig_rules),
+        cmocka_unit_test(test_null_pointers), cmocka_unit_test(test_status_strings), cmocka_unit_test(test_defaults),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -61,18 +61,14 @@ class Instance:
     def get(self, names) -> np.ndarray:
         return np.array(self.fmu.getReal([self.vars[n].valueReference for n in names]))
 
-    def setup(
-        self, start_values: Mapping[str, Any] | None = None, start_time: float = 0.0
-    ) -> None:
+    def setup(self, start_values: Mapping[str, Any] | None = None, start_time: float = 0.0) -> None:
         self.fmu.setupExperiment(startTime=start_time)
         self.time = start_time
         self.fmu.enterInitializationMode()
         if start_values:
             self.set(start_values)
 
-    def start(
-        self, start_values: Mapping[str, Any] | None = None, start_time: float = 0.0
-    ) -> None:
+    def start(self, start_values: Mapping[str, Any] | None = None, start_time: float = 0.0) -> None:
         self.setup(start_values, start_time)
         self.fmu.exitInitializationMode()
 

@@ -34,7 +34,7 @@ int main(void)
     gs_rig_output out;
     gs_rig_step(&consts, &state, &in, &out);
     gs_rig_step(&consts, &state, &in, &out);
-    printf("gear rig: base torque %g N*m (expected 0.5), state %u B, constants %u B\n",
-           (double)out.base_torque, (unsigned)sizeof state, (unsigned)sizeof consts);
+    printf("gear rig: base torque %g N*m (expected 0.5), state %u B, constants %u B\n", (double)out.base_torque,
+           (unsigned)sizeof state, (unsigned)sizeof consts);
     return (out.base_torque > GS_R(0.4999999) && out.base_torque < GS_R(0.5000001)) ? 0 : 1;
 }

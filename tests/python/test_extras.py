@@ -372,8 +372,15 @@ def test_table_matches_pyproject():
     }
     assert set(extras["all"]) == union
     # the test tooling: pytest, hypothesis, build for the sdist of scripts/package_check.sh,
-    # xmlschema for the JUnit verdicts of the HIL scenarios (tests/python/hil/junit.xsd)
-    assert {_distribution(r) for r in extras["test"]} == {"pytest", "hypothesis", "build", "xmlschema"}
+    # xmlschema for the JUnit verdicts of the HIL scenarios (tests/python/hil/junit.xsd),
+    # ruff and mypy for the style checks of scripts/lint.sh
+    test_tools = {"pytest", "hypothesis", "build", "xmlschema", "ruff", "mypy"}
+    assert {_distribution(r) for r in extras["test"]} == test_tools
+    # docs/python.md's table of extras names every tool of the test extra
+    doc = (ROOT / "docs" / "python.md").read_text()
+    rows = [line for line in doc.splitlines() if line.startswith("| `test` |")]
+    assert len(rows) == 1
+    assert {t.strip() for t in rows[0].split("|")[2].split(",")} == test_tools
     assert set(extras["bench"]) <= set(extras["analysis"])
 
 

@@ -9,10 +9,10 @@ T_F = T_F0 + tau_mesh(T_F) numerically (brentq) with the loss laws written in
 T_F, as the friction element of section 11 (at full strength while the
 follower slides, holding it at rest within its two bounds). It is integrated
 by scipy's DOP853 at rtol 1e-9, each step separately, with events at the
-contact boundaries and at the friction element's stops and breakaways. Its own error (checked against rtol
-1e-12 with max_step 1e-4) is below 1e-7 of the peaks: nothing below compares
-at that level except the settled values, where the reference has no transient
-left to integrate.
+contact boundaries and at the friction element's stops and breakaways. Its
+own error (checked against rtol 1e-12 with max_step 1e-4) is below 1e-7 of
+the peaks: nothing below compares at that level except the settled values,
+where the reference has no transient left to integrate.
 
 Cases: every block x every friction model, with backlash: for each block and
 base drive the hard-stop laws rotate so that smooth, full_damped and

@@ -29,7 +29,7 @@ import tomllib
 from collections.abc import Mapping
 from os import PathLike
 from pathlib import Path
-from typing import Any
+from typing import Any, Self
 
 import tomli_w
 
@@ -176,7 +176,7 @@ class Model:
         return out
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any], file: str | PathLike[str] | None = None) -> Model:
+    def from_dict(cls, data: Mapping[str, Any], file: str | PathLike[str] | None = None) -> Self:
         """A model from the parsed TOML structure ({"rig": {...}, "block": {...}})."""
         try:
             if not isinstance(data, Mapping):
@@ -204,7 +204,7 @@ class Model:
         return cls(block, block_params, rig_params, file=file, analysis=analysis)
 
     @classmethod
-    def loads(cls, text: str, file: str | PathLike[str] | None = None) -> Model:
+    def loads(cls, text: str, file: str | PathLike[str] | None = None) -> Self:
         """A model from TOML text."""
         try:
             data = tomllib.loads(text)
@@ -213,7 +213,7 @@ class Model:
         return cls.from_dict(data, file=file)
 
     @classmethod
-    def load(cls, path: str | PathLike[str]) -> Model:
+    def load(cls, path: str | PathLike[str]) -> Self:
         """Read a TOML model file."""
         try:
             text = Path(path).read_bytes().decode("utf-8")

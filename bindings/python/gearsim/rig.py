@@ -122,9 +122,7 @@ class RigResult(tuple):
         if time is not None:
             t = np.asarray(time, dtype=float).reshape(-1)
             if t.shape[0] != data.shape[0]:
-                raise ValueError(
-                    f"time has {t.shape[0]} values for {data.shape[0]} output samples"
-                )
+                raise ValueError(f"time has {t.shape[0]} values for {data.shape[0]} output samples")
             columns["time"] = t
         for i, name in enumerate(OUTPUT_NAMES):
             columns[name] = data[:, i]

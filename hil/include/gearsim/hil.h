@@ -37,14 +37,14 @@
 extern "C" {
 #endif
 
-#define GS_HIL_MAX_FRAMES 32
+#define GS_HIL_MAX_FRAMES         32
 #define GS_HIL_MAX_COMMAND_FRAMES 4 /* one per command role at most */
-#define GS_HIL_MAX_DATA 8           /* classic CAN */
-#define GS_HIL_LATCHED_FLAGS 8      /* the latched flags: the last eight of GS_HIL_FLAG_LIST */
-#define GS_HIL_STATE_FLAGS 4        /* the state flags: the first four */
+#define GS_HIL_MAX_DATA           8 /* classic CAN */
+#define GS_HIL_LATCHED_FLAGS      8 /* the latched flags: the last eight of GS_HIL_FLAG_LIST */
+#define GS_HIL_STATE_FLAGS        4 /* the state flags: the first four */
 /* A replayed frame up to this long after a period boundary counts as at it
  * (the rounding of log formats and of epoch time stamps), in seconds. */
-#define GS_HIL_REPLAY_SLACK_S 1e-6
+#define GS_HIL_REPLAY_SLACK_S     1e-6
 
 /* Index of a gs_rig_output member, for the frame tables. */
 #define GS_HIL_OUTPUT_INDEX(field) (offsetof(gs_rig_output, field) / sizeof(gs_real))
@@ -55,76 +55,76 @@ extern "C" {
  * the name of a gs_rig_output field (out.), a flag (status.flag.) or a
  * counter (status.count.); gs_hil_signal.aux says which.
  */
-#define GS_HIL_ROLE_LIST(X)                                                                         \
-    X(NONE, "")                                                                                     \
-    X(CMD_BASE_SPEED, "cmd.base_speed")                                                             \
-    X(CMD_BASE_TORQUE, "cmd.base_torque")                                                           \
-    X(CMD_LOAD, "cmd.load")                                                                         \
-    X(CMD_MODE, "cmd.mode")                                                                         \
-    X(OUT, "out.")                                  /* aux: GS_HIL_OUTPUT_INDEX(field) */           \
-    X(OUT_FOLLOWER_ANGLE, "out.follower_angle")     /* follower_position modulo 2*pi, [0, 2*pi) */  \
-    X(IN_BASE_SPEED, "in.base_speed")               /* the inputs the rig applied */                \
-    X(IN_BASE_TORQUE, "in.base_torque")                                                             \
-    X(IN_LOAD, "in.load")                                                                           \
-    X(STATUS_COUNTER, "status.counter")             /* rolling: +1 per frame sent */                \
-    X(STATUS_FLAG, "status.flag.")                  /* aux: gs_hil_flag */                          \
-    X(STATUS_COUNT, "status.count.")                /* aux: gs_hil_count */                         \
-    X(PARAM_ID, "param.id")                         /* parameter frame: gs_hil_param_index */       \
-    X(PARAM_ELEMENT, "param.element")               /* the element of an array or table, else 0 */  \
-    X(PARAM_VALUE, "param.value")                   /* the new value, SI */                          \
-    X(ACK_ID, "ack.id")                             /* acknowledgement: the request's parameter */   \
-    X(ACK_ELEMENT, "ack.element")                                                                   \
-    X(ACK_VALUE, "ack.value")                                                                       \
-    X(ACK_RESULT, "ack.result")                     /* gs_hil_param_result */
+#define GS_HIL_ROLE_LIST(X)                                                                    \
+    X(NONE, "")                                                                                \
+    X(CMD_BASE_SPEED, "cmd.base_speed")                                                        \
+    X(CMD_BASE_TORQUE, "cmd.base_torque")                                                      \
+    X(CMD_LOAD, "cmd.load")                                                                    \
+    X(CMD_MODE, "cmd.mode")                                                                    \
+    X(OUT, "out.")                              /* aux: GS_HIL_OUTPUT_INDEX(field) */          \
+    X(OUT_FOLLOWER_ANGLE, "out.follower_angle") /* follower_position modulo 2*pi, [0, 2*pi) */ \
+    X(IN_BASE_SPEED, "in.base_speed")           /* the inputs the rig applied */               \
+    X(IN_BASE_TORQUE, "in.base_torque")                                                        \
+    X(IN_LOAD, "in.load")                                                                      \
+    X(STATUS_COUNTER, "status.counter") /* rolling: +1 per frame sent */                       \
+    X(STATUS_FLAG, "status.flag.")      /* aux: gs_hil_flag */                                 \
+    X(STATUS_COUNT, "status.count.")    /* aux: gs_hil_count */                                \
+    X(PARAM_ID, "param.id")             /* parameter frame: gs_hil_param_index */              \
+    X(PARAM_ELEMENT, "param.element")   /* the element of an array or table, else 0 */         \
+    X(PARAM_VALUE, "param.value")       /* the new value, SI */                                \
+    X(ACK_ID, "ack.id")                 /* acknowledgement: the request's parameter */         \
+    X(ACK_ELEMENT, "ack.element")                                                              \
+    X(ACK_VALUE, "ack.value")                                                                  \
+    X(ACK_RESULT, "ack.result") /* gs_hil_param_result */
 
 /* The modes of a cmd.mode signal; its raw values without a value table. */
-#define GS_HIL_MODE_LIST(X)                                                                         \
-    X(DISABLED, "disabled")                                                                         \
-    X(SPEED, "speed")                                                                               \
+#define GS_HIL_MODE_LIST(X) \
+    X(DISABLED, "disabled") \
+    X(SPEED, "speed")       \
     X(TORQUE, "torque")
 
 /* Further names a cmd.mode value table may give a mode (case and surrounding
  * blanks do not matter). */
-#define GS_HIL_MODE_ALIAS_LIST(X)                                                                   \
-    X(DISABLED, "disable")                                                                          \
-    X(DISABLED, "off")                                                                              \
+#define GS_HIL_MODE_ALIAS_LIST(X) \
+    X(DISABLED, "disable")        \
+    X(DISABLED, "off")            \
     X(DISABLED, "safe")
 
 /* Status flags: the first GS_HIL_STATE_FLAGS are the state during the
  * period the status frame ends; the others are latched: set when their
  * counter grew since the previous frame of the same ID. */
-#define GS_HIL_FLAG_LIST(X)                                                                         \
-    X(CMD_TIMEOUT, "cmd_timeout")                                                                   \
-    X(SAFE_STATE, "safe_state")                                                                     \
-    X(DRIVE_DISABLED, "drive_disabled")                                                             \
-    X(FAULT_ACTIVE, "fault_active")     /* an injected fault acted on this period */                \
-    X(CMD_REJECTED, "cmd_rejected")     /* rx_rejected grew */                                      \
-    X(CMD_LATE, "cmd_late")             /* rx_late grew */                                          \
-    X(FB_SATURATED, "fb_saturated")     /* saturations grew */                                      \
-    X(OVERRUN, "overrun")               /* overruns grew */                                         \
-    X(TX_ERROR, "tx_error")             /* tx_errors grew */                                        \
-    X(PARAM_CHANGED, "param_changed")   /* param_changes grew */                                    \
-    X(PARAM_REFUSED, "param_refused")   /* param_refused grew */                                    \
-    X(LOG_OVERFLOW, "log_overflow")     /* log_dropped grew */
+#define GS_HIL_FLAG_LIST(X)                                                        \
+    X(CMD_TIMEOUT, "cmd_timeout")                                                  \
+    X(SAFE_STATE, "safe_state")                                                    \
+    X(DRIVE_DISABLED, "drive_disabled")                                            \
+    X(FAULT_ACTIVE, "fault_active")   /* an injected fault acted on this period */ \
+    X(CMD_REJECTED, "cmd_rejected")   /* rx_rejected grew */                       \
+    X(CMD_LATE, "cmd_late")           /* rx_late grew */                           \
+    X(FB_SATURATED, "fb_saturated")   /* saturations grew */                       \
+    X(OVERRUN, "overrun")             /* overruns grew */                          \
+    X(TX_ERROR, "tx_error")           /* tx_errors grew */                         \
+    X(PARAM_CHANGED, "param_changed") /* param_changes grew */                     \
+    X(PARAM_REFUSED, "param_refused") /* param_refused grew */                     \
+    X(LOG_OVERFLOW, "log_overflow")   /* log_dropped grew */
 
 /* The counters, in the order of gs_hil_counters.count. */
-#define GS_HIL_COUNT_LIST(X)                                                                        \
-    X(RX_TOTAL, "rx_total")                                                                         \
-    X(RX_USED, "rx_used")                                                                           \
-    X(RX_REJECTED, "rx_rejected")                                                                   \
-    X(RX_LATE, "rx_late")                                                                           \
-    X(RX_IGNORED, "rx_ignored")                                                                     \
-    X(TX_FRAMES, "tx_frames")                                                                       \
-    X(TX_ERRORS, "tx_errors")                                                                       \
-    X(TIMEOUTS, "timeouts")           /* entries into the command timeout after commands came */    \
-    X(RECOVERIES, "recoveries")       /* exits from it */                                           \
-    X(OVERRUNS, "overruns")           /* paced run: periods that started more than a period late */ \
-    X(RESYNCS, "resyncs")             /* paced run: schedule moved to now */                        \
-    X(SATURATIONS, "saturations")                                                                   \
-    X(PERIODS, "periods")                                                                           \
-    X(FAULTS, "faults")               /* values and frames an injected fault changed */           \
-    X(PARAM_CHANGES, "param_changes") /* parameter changes that took effect */                    \
-    X(PARAM_REFUSED, "param_refused") /* parameter requests refused (rx_rejected too) */          \
+#define GS_HIL_COUNT_LIST(X)                                                                  \
+    X(RX_TOTAL, "rx_total")                                                                   \
+    X(RX_USED, "rx_used")                                                                     \
+    X(RX_REJECTED, "rx_rejected")                                                             \
+    X(RX_LATE, "rx_late")                                                                     \
+    X(RX_IGNORED, "rx_ignored")                                                               \
+    X(TX_FRAMES, "tx_frames")                                                                 \
+    X(TX_ERRORS, "tx_errors")                                                                 \
+    X(TIMEOUTS, "timeouts")     /* entries into the command timeout after commands came */    \
+    X(RECOVERIES, "recoveries") /* exits from it */                                           \
+    X(OVERRUNS, "overruns")     /* paced run: periods that started more than a period late */ \
+    X(RESYNCS, "resyncs")       /* paced run: schedule moved to now */                        \
+    X(SATURATIONS, "saturations")                                                             \
+    X(PERIODS, "periods")                                                                     \
+    X(FAULTS, "faults")               /* values and frames an injected fault changed */       \
+    X(PARAM_CHANGES, "param_changes") /* parameter changes that took effect */                \
+    X(PARAM_REFUSED, "param_refused") /* parameter requests refused (rx_rejected too) */      \
     X(LOG_DROPPED, "log_dropped")     /* recording: frames the ring had no room for (runner) */
 
 /* What became of a received frame: "class.reason". PENDING is a valid
@@ -133,13 +133,13 @@ extern "C" {
  * ignored, in this order. */
 #define GS_HIL_REASON_LIST(X)                                                                       \
     X(PENDING, "pending")                                                                           \
-    X(REJECTED_UNKNOWN_ID, "rejected.unknown_id")   /* not in the DBC, or extended/standard */      \
+    X(REJECTED_UNKNOWN_ID, "rejected.unknown_id") /* not in the DBC, or extended/standard */        \
     X(REJECTED_BAD_LENGTH, "rejected.bad_length")                                                   \
     X(REJECTED_UNDECODABLE, "rejected.undecodable") /* not finite, or no such mode */               \
     X(REJECTED_OUT_OF_RANGE, "rejected.out_of_range")                                               \
     X(REJECTED_MODE_MISMATCH, "rejected.mode_mismatch")                                             \
-    X(REJECTED_BAD_PARAM, "rejected.bad_param")     /* unknown parameter or element, invalid value */ \
-    X(REJECTED_PARAM_BUSY, "rejected.param_busy")   /* more requests in one period than the queue */  \
+    X(REJECTED_BAD_PARAM, "rejected.bad_param")   /* unknown parameter or element, invalid value */ \
+    X(REJECTED_PARAM_BUSY, "rejected.param_busy") /* more requests in one period than the queue */  \
     X(LATE_SUPERSEDED, "late.superseded")                                                           \
     X(LATE_OUT_OF_ORDER, "late.out_of_order")                                                       \
     X(LATE_AFTER_STOP, "late.after_stop")                                                           \
@@ -149,45 +149,45 @@ extern "C" {
     X(IGNORED_REMOTE_FRAME, "ignored.remote_frame")
 
 /* What became of a parameter request: the ack.result signal's values. */
-#define GS_HIL_PARAM_RESULT_LIST(X)                                                                 \
-    X(APPLIED, "applied")                                                                           \
-    X(UNKNOWN_PARAM, "unknown_param")   /* no tunable parameter of that index */                    \
-    X(BAD_ELEMENT, "bad_element")       /* an element the parameter does not have (in use) */       \
-    X(INVALID_VALUE, "invalid_value")   /* the rig's init refused the new value */                  \
-    X(BUSY, "busy")                     /* more than GS_HIL_PARAM_QUEUE requests in one period */   \
-    X(UNAVAILABLE, "unavailable")       /* the bridge was set up without the rig's parameters */
+#define GS_HIL_PARAM_RESULT_LIST(X)                                                             \
+    X(APPLIED, "applied")                                                                       \
+    X(UNKNOWN_PARAM, "unknown_param") /* no tunable parameter of that index */                  \
+    X(BAD_ELEMENT, "bad_element")     /* an element the parameter does not have (in use) */     \
+    X(INVALID_VALUE, "invalid_value") /* the rig's init refused the new value */                \
+    X(BUSY, "busy")                   /* more than GS_HIL_PARAM_QUEUE requests in one period */ \
+    X(UNAVAILABLE, "unavailable")     /* the bridge was set up without the rig's parameters */
 
 /* Injected faults (docs/hil.md, "Fault injection"). The first ones act on a
  * feedback signal's value between the model and the encoder; dropout drops
  * the frame of its signal; the last four act on a whole frame. */
-#define GS_HIL_FAULT_LIST(X)                                                                        \
-    X(OFFSET, "offset")             /* value + value */                                             \
-    X(GAIN, "gain")                 /* value * value */                                             \
-    X(NOISE, "noise")               /* value + value * N(0, 1), seeded */                           \
-    X(FREEZE, "freeze")             /* the value its frame last carried before the fault */        \
-    X(STUCK, "stuck")               /* value */                                                     \
-    X(DROPOUT, "dropout")           /* the signal's frame is not sent */                            \
-    X(DELAY, "delay")               /* the model's value periods frame periods earlier */          \
-    X(QUANTISE, "quantise")         /* value * round(x / value), half to even */                    \
-    X(CLAMP, "clamp")               /* x within [value, value2] */                                  \
-    X(DROP, "drop")                 /* the frame is not sent */                                     \
-    X(DUPLICATE, "duplicate")       /* the frame is sent twice */                                   \
-    X(CORRUPT, "corrupt")           /* periods distinct bits of the frame flipped, seeded */                 \
+#define GS_HIL_FAULT_LIST(X)                                                                 \
+    X(OFFSET, "offset")             /* value + value */                                      \
+    X(GAIN, "gain")                 /* value * value */                                      \
+    X(NOISE, "noise")               /* value + value * N(0, 1), seeded */                    \
+    X(FREEZE, "freeze")             /* the value its frame last carried before the fault */  \
+    X(STUCK, "stuck")               /* value */                                              \
+    X(DROPOUT, "dropout")           /* the signal's frame is not sent */                     \
+    X(DELAY, "delay")               /* the model's value periods frame periods earlier */    \
+    X(QUANTISE, "quantise")         /* value * round(x / value), half to even */             \
+    X(CLAMP, "clamp")               /* x within [value, value2] */                           \
+    X(DROP, "drop")                 /* the frame is not sent */                              \
+    X(DUPLICATE, "duplicate")       /* the frame is sent twice */                            \
+    X(CORRUPT, "corrupt")           /* periods distinct bits of the frame flipped, seeded */ \
     X(COUNTER_STOP, "counter_stop") /* the status frame's rolling counter stops */
 
 /* Comparisons of a trigger condition. */
-#define GS_HIL_OP_LIST(X)                                                                           \
-    X(LT, "<")                                                                                      \
-    X(LE, "<=")                                                                                     \
-    X(GT, ">")                                                                                      \
-    X(GE, ">=")                                                                                     \
-    X(EQ, "==")                                                                                     \
+#define GS_HIL_OP_LIST(X) \
+    X(LT, "<")            \
+    X(LE, "<=")           \
+    X(GT, ">")            \
+    X(GE, ">=")           \
+    X(EQ, "==")           \
     X(NE, "!=")
 
-#define GS_HIL_ROLE_ENUM_(suffix, name) GS_HIL_ROLE_##suffix,
-#define GS_HIL_MODE_ENUM_(suffix, name) GS_HIL_MODE_##suffix,
-#define GS_HIL_FLAG_ENUM_(suffix, name) GS_HIL_FLAG_##suffix,
-#define GS_HIL_COUNT_ENUM_(suffix, name) GS_HIL_COUNT_##suffix,
+#define GS_HIL_ROLE_ENUM_(suffix, name)   GS_HIL_ROLE_##suffix,
+#define GS_HIL_MODE_ENUM_(suffix, name)   GS_HIL_MODE_##suffix,
+#define GS_HIL_FLAG_ENUM_(suffix, name)   GS_HIL_FLAG_##suffix,
+#define GS_HIL_COUNT_ENUM_(suffix, name)  GS_HIL_COUNT_##suffix,
 #define GS_HIL_REASON_ENUM_(suffix, name) GS_HIL_##suffix,
 
 typedef enum { GS_HIL_ROLE_LIST(GS_HIL_ROLE_ENUM_) GS_HIL_ROLES } gs_hil_role;
@@ -196,8 +196,8 @@ typedef enum { GS_HIL_FLAG_LIST(GS_HIL_FLAG_ENUM_) GS_HIL_FLAGS } gs_hil_flag;
 typedef enum { GS_HIL_COUNT_LIST(GS_HIL_COUNT_ENUM_) GS_HIL_COUNTS } gs_hil_count;
 typedef enum { GS_HIL_REASON_LIST(GS_HIL_REASON_ENUM_) GS_HIL_REASONS } gs_hil_reason;
 #define GS_HIL_PARAM_RESULT_ENUM_(suffix, name) GS_HIL_PARAM_##suffix,
-#define GS_HIL_FAULT_ENUM_(suffix, name) GS_HIL_FAULT_##suffix,
-#define GS_HIL_OP_ENUM_(suffix, name) GS_HIL_OP_##suffix,
+#define GS_HIL_FAULT_ENUM_(suffix, name)        GS_HIL_FAULT_##suffix,
+#define GS_HIL_OP_ENUM_(suffix, name)           GS_HIL_OP_##suffix,
 typedef enum { GS_HIL_PARAM_RESULT_LIST(GS_HIL_PARAM_RESULT_ENUM_) GS_HIL_PARAM_RESULTS } gs_hil_param_result;
 typedef enum { GS_HIL_FAULT_LIST(GS_HIL_FAULT_ENUM_) GS_HIL_FAULTS } gs_hil_fault_kind;
 typedef enum { GS_HIL_OP_LIST(GS_HIL_OP_ENUM_) GS_HIL_OPS } gs_hil_op;
@@ -206,14 +206,14 @@ typedef enum { GS_HIL_OP_LIST(GS_HIL_OP_ENUM_) GS_HIL_OPS } gs_hil_op;
 enum { GS_HIL_CMD_BASE_SPEED = 0, GS_HIL_CMD_BASE_TORQUE, GS_HIL_CMD_LOAD, GS_HIL_CMD_MODE, GS_HIL_CMD_ROLES };
 
 /* The names of the lists above ("" or "?" out of range). */
-const char *gs_hil_role_name(gs_hil_role role);     /* "cmd.load", "out." (a family) */
-const char *gs_hil_mode_name(gs_hil_mode mode);     /* "disabled", "speed", "torque" */
-const char *gs_hil_flag_name(gs_hil_flag flag);     /* "cmd_timeout", ... */
-const char *gs_hil_count_name(gs_hil_count count);  /* "rx_total", ... */
-const char *gs_hil_reason_name(gs_hil_reason reason); /* "rejected.unknown_id", ... "pending" */
+const char *gs_hil_role_name(gs_hil_role role);                   /* "cmd.load", "out." (a family) */
+const char *gs_hil_mode_name(gs_hil_mode mode);                   /* "disabled", "speed", "torque" */
+const char *gs_hil_flag_name(gs_hil_flag flag);                   /* "cmd_timeout", ... */
+const char *gs_hil_count_name(gs_hil_count count);                /* "rx_total", ... */
+const char *gs_hil_reason_name(gs_hil_reason reason);             /* "rejected.unknown_id", ... "pending" */
 const char *gs_hil_param_result_name(gs_hil_param_result result); /* "applied", ... */
-const char *gs_hil_fault_name(gs_hil_fault_kind kind);              /* "offset", ... */
-const char *gs_hil_op_name(gs_hil_op op);                           /* "<", ... */
+const char *gs_hil_fault_name(gs_hil_fault_kind kind);            /* "offset", ... */
+const char *gs_hil_op_name(gs_hil_op op);                         /* "<", ... */
 
 /* A GsRole text -> *role and *aux (0 where no aux). 0, or -1 when the text
  * names no role ("" included). */
@@ -238,10 +238,10 @@ typedef struct {
  * bits), little-endian (Intel) or big-endian (Motorola). */
 typedef struct {
     const char *name;
-    unsigned start, length;     /* bits, as the DBC numbers them (big-endian: the most significant bit) */
+    unsigned start, length; /* bits, as the DBC numbers them (big-endian: the most significant bit) */
     int is_signed, is_big_endian, is_float;
     double scale, offset;
-    double minimum, maximum;    /* physical, as the DBC gives them: -HUGE_VAL / HUGE_VAL for none */
+    double minimum, maximum; /* physical, as the DBC gives them: -HUGE_VAL / HUGE_VAL for none */
     gs_hil_role role;
     size_t aux;
     const gs_hil_choice *choices; /* the value table, or NULL */
@@ -398,8 +398,8 @@ int gs_hil_param_parse(gs_rig_block block, const char *text, unsigned *index, un
  * BAD_ELEMENT (not one it has, or a table entry beyond the count in use) or
  * INVALID_VALUE (not finite). Whether the rig takes the value is its
  * init's to say. */
-gs_hil_param_result gs_hil_param_set(gs_rig_block block, gs_hil_rig_params *params, unsigned index,
-                                     unsigned element, double value);
+gs_hil_param_result gs_hil_param_set(gs_rig_block block, gs_hil_rig_params *params, unsigned index, unsigned element,
+                                     double value);
 
 #define GS_HIL_PARAM_QUEUE 8 /* parameter requests per period */
 
@@ -413,7 +413,7 @@ typedef struct {
 /* ---- faults ---------------------------------------------------------------- */
 
 #define GS_HIL_MAX_FAULTS 16
-#define GS_HIL_DELAY_MAX 128 /* periods a delay fault may hold back */
+#define GS_HIL_DELAY_MAX  128 /* periods a delay fault may hold back */
 
 /* Where a condition's value comes from. */
 typedef enum {
@@ -436,11 +436,11 @@ typedef struct {
  * to end_period). */
 typedef struct {
     gs_hil_fault_kind kind;
-    unsigned frame;         /* DBC frame index */
-    int signal;             /* signal index in the frame; -1 for a frame fault */
-    double value, value2;   /* see GS_HIL_FAULT_LIST; clamp: [value, value2] (+-inf: no bound) */
-    unsigned periods;       /* delay: periods (1..GS_HIL_DELAY_MAX); corrupt: bits per frame (1..64) */
-    uint64_t seed;          /* noise, corrupt */
+    unsigned frame;       /* DBC frame index */
+    int signal;           /* signal index in the frame; -1 for a frame fault */
+    double value, value2; /* see GS_HIL_FAULT_LIST; clamp: [value, value2] (+-inf: no bound) */
+    unsigned periods;     /* delay: periods (1..GS_HIL_DELAY_MAX); corrupt: bits per frame (1..64) */
+    uint64_t seed;        /* noise, corrupt */
     uint64_t start_period, end_period;
     uint64_t duration_periods;
     int has_trigger;
@@ -454,18 +454,18 @@ typedef struct {
     uint64_t rng;         /* noise, corrupt: the generator's state */
     double last_value;    /* freeze: the value its frame last carried */
     int has_last;
-    uint64_t counter;     /* counter_stop: the counter value held */
+    uint64_t counter; /* counter_stop: the counter value held */
     int has_counter;
-    uint64_t count;       /* values and frames it changed */
-    uint64_t ring_start;  /* delay: the first period recorded */
+    uint64_t count;                /* values and frames it changed */
+    uint64_t ring_start;           /* delay: the first period recorded */
     double ring[GS_HIL_DELAY_MAX]; /* delay: the model's value of the last periods */
 } gs_hil_fault;
 
 /* ---- scenarios --------------------------------------------------------------- */
 
 #define GS_HIL_SCENARIO_MAX_STEPS 256
-#define GS_HIL_MAX_EXPECTS 64
-#define GS_HIL_TEXT_MAX 128
+#define GS_HIL_MAX_EXPECTS        64
+#define GS_HIL_TEXT_MAX           128
 
 typedef enum { GS_HIL_STEP_LOAD = 0, GS_HIL_STEP_PARAM, GS_HIL_STEP_FAULT, GS_HIL_STEP_EXPECT } gs_hil_step_kind;
 typedef enum { GS_HIL_EXPECT_AT = 0, GS_HIL_EXPECT_WITHIN, GS_HIL_EXPECT_UNTIL } gs_hil_expect_mode;
@@ -474,25 +474,25 @@ typedef enum { GS_HIL_VERDICT_PENDING = 0, GS_HIL_VERDICT_PASS, GS_HIL_VERDICT_F
 /* One [[step]] of a scenario file (docs/hil.md, "Scenarios"); times in s. */
 typedef struct {
     gs_hil_step_kind kind;
-    unsigned line;          /* in the scenario file */
+    unsigned line; /* in the scenario file */
     double at_s;
     char name[GS_HIL_TEXT_MAX];
-    double value, over_s;   /* LOAD: the scenario's load from at_s (a ramp over over_s); PARAM: the value */
+    double value, over_s;    /* LOAD: the scenario's load from at_s (a ramp over over_s); PARAM: the value */
     unsigned param, element; /* PARAM */
-    unsigned index;         /* FAULT: in faults[]; EXPECT: in expects[] */
+    unsigned index;          /* FAULT: in faults[]; EXPECT: in expects[] */
 } gs_hil_step;
 
 typedef struct {
-    gs_hil_fault_spec spec;     /* periods resolved when attached */
+    gs_hil_fault_spec spec;           /* periods resolved when attached */
     double at_s, until_s, duration_s; /* until_s: +inf, duration_s: 0 when not given */
     unsigned line;
 } gs_hil_fault_def;
 
 typedef struct {
-    gs_hil_condition target;  /* a command signal or a state flag (op and value unused) */
-    double minimum, maximum;  /* the range the value must be in */
+    gs_hil_condition target; /* a command signal or a state flag (op and value unused) */
+    double minimum, maximum; /* the range the value must be in */
     gs_hil_expect_mode mode;
-    double at_s, window_s;    /* WITHIN: the window's length; UNTIL: its end time */
+    double at_s, window_s;      /* WITHIN: the window's length; UNTIL: its end time */
     char what[GS_HIL_TEXT_MAX]; /* "BaseSpeedCmd in [4, 6]", for the verdict */
     char name[GS_HIL_TEXT_MAX]; /* the test case's name */
     unsigned line;

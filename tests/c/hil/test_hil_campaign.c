@@ -198,13 +198,40 @@ static void value_fault(gs_hil_fault_kind kind, double value, double value2, dou
     assert_memory_equal(&faulted, &state, sizeof state);
 }
 
-static double offset_of(uint64_t p, double v) { return model_speed(p) + v; }
-static double gain_of(uint64_t p, double v) { return model_speed(p) * v; }
-static double stuck_of(uint64_t p, double v) { (void)p; return v; }
-static double freeze_of(uint64_t p, double v) { (void)p; (void)v; return model_speed(19); }
-static double delay_of(uint64_t p, double v) { (void)v; return model_speed(p - 5u); }
-static double quantise_of(uint64_t p, double v) { return nearbyint(model_speed(p) / v) * v; }
-static double clamp_of(uint64_t p, double v) { (void)p; (void)v; return 5.0; }
+static double offset_of(uint64_t p, double v)
+{
+    return model_speed(p) + v;
+}
+static double gain_of(uint64_t p, double v)
+{
+    return model_speed(p) * v;
+}
+static double stuck_of(uint64_t p, double v)
+{
+    (void)p;
+    return v;
+}
+static double freeze_of(uint64_t p, double v)
+{
+    (void)p;
+    (void)v;
+    return model_speed(19);
+}
+static double delay_of(uint64_t p, double v)
+{
+    (void)v;
+    return model_speed(p - 5u);
+}
+static double quantise_of(uint64_t p, double v)
+{
+    return nearbyint(model_speed(p) / v) * v;
+}
+static double clamp_of(uint64_t p, double v)
+{
+    (void)p;
+    (void)v;
+    return 5.0;
+}
 
 static void test_value_faults(void **unused)
 {
@@ -488,7 +515,8 @@ static void test_parameter_refusals_are_counted_and_acknowledged(void **unused)
     /* the queue holds GS_HIL_PARAM_QUEUE requests per period */
     for (unsigned k = 0; k <= GS_HIL_PARAM_QUEUE; ++k) {
         gs_hil_frame p = param_frame(param_index("load_offset"), 0, 0.001 * k);
-        assert_int_equal(gs_hil_handle(&bridge, &p), k < GS_HIL_PARAM_QUEUE ? GS_HIL_PENDING : GS_HIL_REJECTED_PARAM_BUSY);
+        assert_int_equal(gs_hil_handle(&bridge, &p),
+                         k < GS_HIL_PARAM_QUEUE ? GS_HIL_PENDING : GS_HIL_REJECTED_PARAM_BUSY);
     }
     gs_hil_advance(&bridge, 2);
     assert_int_equal(bridge.counters.count[GS_HIL_COUNT_PARAM_CHANGES], GS_HIL_PARAM_QUEUE);
@@ -503,9 +531,9 @@ static void parse_fails(const char *text, const char *expected)
 {
     gs_hil_error err;
     memset(&err, 0, sizeof err);
-    assert_int_equal(gs_hil_scenario_parse(&scenario, text, strlen(text), "s.toml", &gs_hil_dbc_gear_rig,
-                                           GS_RIG_SIMPLE_GEAR, &err),
-                     GS_HIL_E_CONFIG);
+    assert_int_equal(
+        gs_hil_scenario_parse(&scenario, text, strlen(text), "s.toml", &gs_hil_dbc_gear_rig, GS_RIG_SIMPLE_GEAR, &err),
+        GS_HIL_E_CONFIG);
     if (strstr(err.message, expected) == NULL) {
         fail_msg("message \"%s\" lacks \"%s\"", err.message, expected);
     }
@@ -538,7 +566,8 @@ static void test_bad_scenarios_name_file_line_and_key(void **unused)
         {"[[step]]\nat = 0\nfault = \"offset\"\nsignal = \"BaseSpeed\"\n", "s.toml:3: value: missing (a number)"},
         {"[[step]]\nat = 0\nfault = \"freeze\"\nsignal = \"BaseSpeed\"\nvalue = 2\n",
          "s.toml:7: value: not a key of a fault step"},
-        {"[[step]]\nat = 0\nfault = \"drop\"\nframe = \"GearCmd\"\n", "s.toml:6: frame: 'GearCmd' is no feedback frame"},
+        {"[[step]]\nat = 0\nfault = \"drop\"\nframe = \"GearCmd\"\n",
+         "s.toml:6: frame: 'GearCmd' is no feedback frame"},
         {"[[step]]\nat = 0.5\nfault = \"stuck\"\nsignal = \"BaseSpeed\"\nvalue = 1\nuntil = 0.2\n",
          "s.toml:8: until: a time after the step's 'at'"},
         {"[[step]]\nat = 0\nfault = \"stuck\"\nsignal = \"BaseSpeed\"\nvalue = 1\nwhen = \"BaseSpeed >> 3\"\n",
@@ -562,8 +591,8 @@ static void run_scenario(const char *text, double speed, uint64_t periods)
 {
     init_bridge();
     gs_hil_error err;
-    if (gs_hil_scenario_parse(&scenario, text, strlen(text), "campaign.toml", &gs_hil_dbc_gear_rig,
-                              GS_RIG_SIMPLE_GEAR, &err) != GS_HIL_OK ||
+    if (gs_hil_scenario_parse(&scenario, text, strlen(text), "campaign.toml", &gs_hil_dbc_gear_rig, GS_RIG_SIMPLE_GEAR,
+                              &err) != GS_HIL_OK ||
         gs_hil_attach_scenario(&bridge, &scenario, &err) != GS_HIL_OK) {
         fail_msg("%s", err.message);
     }
@@ -599,9 +628,9 @@ static void test_scenario_verdict_and_junit(void **unused)
     gs_hil_verdict_counts(&bridge, &passed, &failed, &pending);
     assert_int_equal(passed, 3);
     assert_int_equal(failed, 0);
-    assert_float_equal(bridge.input.load, 0.2, 1e-12);                              /* the load profile */
-    assert_float_equal(gs_hil_params(&bridge)->rig.load_offset, GS_R(0.01), 0.0);    /* the parameter step */
-    assert_int_equal(bridge.counters.count[GS_HIL_COUNT_FAULTS], 10);               /* frames of periods 109..199 */
+    assert_float_equal(bridge.input.load, 0.2, 1e-12);                            /* the load profile */
+    assert_float_equal(gs_hil_params(&bridge)->rig.load_offset, GS_R(0.01), 0.0); /* the parameter step */
+    assert_int_equal(bridge.counters.count[GS_HIL_COUNT_FAULTS], 10);             /* frames of periods 109..199 */
     size_t n = gs_hil_junit(&bridge, xml, sizeof xml);
     assert_true(n < sizeof xml && n == strlen(xml));
     assert_non_null(strstr(xml, "<testsuite name=\"gear &amp; &lt;campaign&gt;\" tests=\"3\" failures=\"0\""));
@@ -633,9 +662,9 @@ static void test_scenario_refuses_a_value_the_rig_refuses(void **unused)
                         "value = -3\n";
     init_bridge();
     gs_hil_error err;
-    assert_int_equal(gs_hil_scenario_parse(&scenario, text, strlen(text), "p.toml", &gs_hil_dbc_gear_rig,
-                                           GS_RIG_SIMPLE_GEAR, &err),
-                     GS_HIL_OK);
+    assert_int_equal(
+        gs_hil_scenario_parse(&scenario, text, strlen(text), "p.toml", &gs_hil_dbc_gear_rig, GS_RIG_SIMPLE_GEAR, &err),
+        GS_HIL_OK);
     assert_int_equal(gs_hil_attach_scenario(&bridge, &scenario, &err), GS_HIL_E_CONFIG);
     if (strstr(err.message, "p.toml:6: value: load_coulomb_friction = -3 refused by the rig") == NULL) {
         fail_msg("%s", err.message);

@@ -42,8 +42,9 @@ static void test_role_parse(void **unused)
     assert_int_equal(aux, GS_HIL_FLAG_FB_SATURATED);
     assert_int_equal(gs_hil_role_parse("status.count.recoveries", &role, &aux), 0);
     assert_int_equal(aux, GS_HIL_COUNT_RECOVERIES);
-    const char *unknown[] = {"", "out.", "out.warp_speed", "status.flag.rx_used", "status.count.", "cmd.base_speed ",
-                             "status", "in.temperature"};
+    const char *unknown[] = {
+        "",       "out.",          "out.warp_speed", "status.flag.rx_used", "status.count.", "cmd.base_speed ",
+        "status", "in.temperature"};
     for (size_t i = 0; i < sizeof unknown / sizeof unknown[0]; ++i) {
         assert_int_equal(gs_hil_role_parse(unknown[i], &role, &aux), -1);
         assert_int_equal(role, GS_HIL_ROLE_NONE);

@@ -332,9 +332,9 @@ def test_unreachable_scheduler_is_one_line(line, tmp_path):
         timeout=BOUND_S,
     )
     assert proc.returncode == 2
-    assert (
-        len(proc.stderr.strip().splitlines()) == 1 and "cannot connect" in proc.stderr
-    ), proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1 and "cannot connect" in proc.stderr, (
+        proc.stderr
+    )
 
 
 def test_an_interrupted_run_leaves_no_partial_output_and_resumes(line, tmp_path):

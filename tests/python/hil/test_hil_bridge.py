@@ -230,7 +230,12 @@ def test_command_timeout_safe_state_and_recovery(link: tuple[Bridge, Peer]) -> N
     bridge, peer = link
     assert bridge.timeout_periods == 50
     bridge.tick()
-    assert bridge.state == {"cmd_timeout": True, "safe_state": True, "drive_disabled": False, "fault_active": False}
+    assert bridge.state == {
+        "cmd_timeout": True,
+        "safe_state": True,
+        "drive_disabled": False,
+        "fault_active": False,
+    }
     assert bridge.counters.timeouts == 0  # no command yet is not a timeout event
     states = {}
     for k in range(1, 400):
@@ -269,7 +274,12 @@ def test_disabled_mode_is_the_safe_state_without_timeout(link: tuple[Bridge, Pee
     assert bridge.inputs["base_speed"] == 8.0
     peer.command(base_speed=8.0, load=0.2, mode="disabled")
     bridge.tick()
-    assert bridge.state == {"cmd_timeout": False, "safe_state": True, "drive_disabled": True, "fault_active": False}
+    assert bridge.state == {
+        "cmd_timeout": False,
+        "safe_state": True,
+        "drive_disabled": True,
+        "fault_active": False,
+    }
     assert bridge.inputs == {"base_speed": 0.0, "base_torque": 0.0, "load": 0.0}
     assert bridge.counters.rx_used == 2 and bridge.counters.rx_rejected == 0
 

@@ -129,11 +129,13 @@ def _check_window(kind: str, ref: dict, got: dict, dbc: RigDbc) -> None:
             assert len(g) == 2 and all(bytes(m.data) == bytes(r[0].data) for m in g), t
             continue
         if kind == "counter_stop":
-            assert value(dbc, g[0], "status.counter") == value(dbc, ref[before[-1]][0], "status.counter")
+            assert value(dbc, g[0], "status.counter") == value(
+                dbc, ref[before[-1]][0], "status.counter"
+            )
             assert value(dbc, g[0], "status.flag.fault_active") == 1.0
             continue
         if kind == "corrupt":
-            flipped = sum(bin(a ^ b).count("1") for a, b in zip(g[0].data, r[0].data))
+            flipped = sum(bin(a ^ b).count("1") for a, b in zip(g[0].data, r[0].data, strict=False))
             assert flipped == 2, t
             continue
         x, want = value(dbc, g[0], "out.base_speed"), value(dbc, r[0], "out.base_speed")
@@ -169,7 +171,10 @@ def test_fault_applied_counted_flagged_and_cleared(tmp_path: Path, kind: str) ->
         r, g = frames(ref_all, fid), frames(got_all, fid)
         for t in r:
             if not inside(t) and fid not in (0x210, 0x211, 0x212):
-                assert [bytes(m.data) for m in g.get(t, [])] == [bytes(m.data) for m in r[t]], (fid, t)
+                assert [bytes(m.data) for m in g.get(t, [])] == [bytes(m.data) for m in r[t]], (
+                    fid,
+                    t,
+                )
     _check_window(kind, ref, faulted, dbc)
     if kind == "noise":
         noisy = [
@@ -183,7 +188,9 @@ def test_fault_applied_counted_flagged_and_cleared(tmp_path: Path, kind: str) ->
     per_window = {0x200: 15, 0x201: 15, 0x210: 1}[frame_id]
     assert out["faults"] == per_window
     # flagged: the status frames of 0.1 and 0.3 s say no fault, that of 0.2 s a fault
-    status = {t: value(dbc, m[0], "status.flag.fault_active") for t, m in frames(got, 0x210).items()}
+    status = {
+        t: value(dbc, m[0], "status.flag.fault_active") for t, m in frames(got, 0x210).items()
+    }
     assert status == {0.1: 0.0, 0.2: 1.0, 0.3: 0.0}
     assert out["state"]["fault_active"] is False  # cleared at its end
     # the model's outputs are those of the reference run
@@ -198,14 +205,19 @@ def test_c_runner_applies_the_faults_as_the_python_bridge(tmp_path: Path) -> Non
     dbc = RigDbc(block="gear")
     log = write_log(
         tmp_path / "host.log",
-        [m for k in range(0, 600, 10) for m in command(dbc, 1.7e9 + k * 1e-3, base_speed=speed_at(k))],
+        [
+            m
+            for k in range(0, 600, 10)
+            for m in command(dbc, 1.7e9 + k * 1e-3, base_speed=speed_at(k))
+        ],
     )
     scenario = write_scenario(
         tmp_path / "s.toml",
         'at = 0.05\nfault = "noise"\nsignal = "FollowerSpeed"\nvalue = 0.3\nduration = 0.2',
-        'at = 0.1\nfault = "stuck"\nsignal = "BaseSpeed"\nvalue = 0\nwhen = "BaseSpeed > 10.25"\nduration = 0.05',
+        'at = 0.1\nfault = "stuck"\nsignal = "BaseSpeed"\nvalue = 0\n'
+        'when = "BaseSpeed > 10.25"\nduration = 0.05',
         'at = 0.2\nfault = "duplicate"\nframe = "GearFbThermal"\nuntil = 0.4',
-        'at = 0.3\nload = 0.2\nover = 0.1',
+        "at = 0.3\nload = 0.2\nover = 0.1",
         'at = 0.35\nparam = "load_coulomb_friction"\nvalue = 0.05',
         'at = 0.4\nexpect = "BaseSpeedCmd"\nmin = 13.95\nmax = 14.95\nuntil = 0.5',
         'at = 0.45\nexpect = "safe_state"\nequals = true',
@@ -223,7 +235,9 @@ def test_c_runner_applies_the_faults_as_the_python_bridge(tmp_path: Path) -> Non
         ]
     )
     assert res.returncode == 3, res.stderr  # safe_state at 0.45 s: the emulator is still commanding
-    py = replay(gear_model(), log, tmp_path / "py.log", scenario=scenario, junit=tmp_path / "py.xml")
+    py = replay(
+        gear_model(), log, tmp_path / "py.log", scenario=scenario, junit=tmp_path / "py.xml"
+    )
     c_msgs, py_msgs = read_log(c_out), read_log(tmp_path / "py.log")
     assert [(m.arbitration_id, bytes(m.data)) for m in c_msgs] == [
         (m.arbitration_id, bytes(m.data)) for m in py_msgs
@@ -241,7 +255,8 @@ def test_c_runner_applies_the_faults_as_the_python_bridge(tmp_path: Path) -> Non
 
 
 STUCK_SENSOR = (
-    'at = 0.2\nexpect = "DriveMode"\nequals = "speed"\nuntil = 0.3\nname = "drives before the fault"',
+    'at = 0.2\nexpect = "DriveMode"\nequals = "speed"\nuntil = 0.3\n'
+    'name = "drives before the fault"',
     'at = 0.3\nfault = "stuck"\nsignal = "BaseSpeed"\nvalue = 0.0',
     'at = 0.3\nexpect = "DriveMode"\nequals = "disabled"\nwithin = 0.1\n'
     'name = "disables within 100 ms of a stuck speed sensor"',
@@ -267,8 +282,10 @@ class Controller:
 
     def commands(self) -> list[Any]:
         return self.dbc.encode_command(
-            {"cmd.base_speed": 0.0 if self.disabled else 10.0,
-             "cmd.mode": "disabled" if self.disabled else "speed"}
+            {
+                "cmd.base_speed": 0.0 if self.disabled else 10.0,
+                "cmd.mode": "disabled" if self.disabled else "speed",
+            }
         )
 
 
@@ -304,7 +321,10 @@ def test_verdict_of_a_controller_emulator(tmp_path: Path, good: bool) -> None:
         bus.shutdown()
     root = _validate(bridge.junit())
     cases = {c.get("name"): c.find("failure") for c in root.iter("testcase")}
-    assert set(cases) == {"drives before the fault", "disables within 100 ms of a stuck speed sensor"}
+    assert set(cases) == {
+        "drives before the fault",
+        "disables within 100 ms of a stuck speed sensor",
+    }
     assert cases["drives before the fault"] is None
     if good:
         assert cases["disables within 100 ms of a stuck speed sensor"] is None
@@ -351,8 +371,9 @@ def test_live_c_runner_verdict_over_socketcand(tmp_path: Path, good: bool) -> No
     this process on python-can's socketcand client, no kernel CAN."""
     scenario = write_scenario(tmp_path / "s.toml", *STUCK_SENSOR, duration=0.8, name="stuck sensor")
     xml = tmp_path / "verdict.xml"
-    proc, port = _socketcand_runner(tmp_path, "--scenario", str(scenario), "--junit", str(xml),
-                                    "--duration", "3600")
+    proc, port = _socketcand_runner(
+        tmp_path, "--scenario", str(scenario), "--junit", str(xml), "--duration", "3600"
+    )
     dbc = RigDbc(block="gear")
     ctl = Controller(dbc, good)
     sent = [0]
@@ -404,7 +425,9 @@ def test_parameter_change_continues_as_a_rig_with_the_new_parameters() -> None:
             new_rig.restore(snap)
         if k > 200:
             expected = new_rig.step(base_speed=10.0, ambient_temperature=293.15)
-            assert bridge.last_output == expected.as_dict() if hasattr(expected, "as_dict") else True
+            assert (
+                bridge.last_output == expected.as_dict() if hasattr(expected, "as_dict") else True
+            )
             assert bridge.last_output["base_torque"] == expected.base_torque
     w_f, v_th = 10.0 / 3.0, 0.001
     hand_old = 0.02 * math.tanh(4 * w_f / v_th) / (3 * 0.95)
@@ -423,8 +446,11 @@ def test_parameter_frames_refused_are_counted_and_acknowledged() -> None:
     assert "load_coulomb_friction" in keys and "teeth_ratio" not in keys
     bad = dbc.encode_param("load_coulomb_friction", -1.0)  # the rig's init refuses < 0
     assert bridge.handle(bad) == "pending"
-    unknown = can.Message(arbitration_id=dbc.param_frame.frame_id, data=bytes([200, 0, 0, 0, 0, 0, 0, 0]),
-                          is_extended_id=False)
+    unknown = can.Message(
+        arbitration_id=dbc.param_frame.frame_id,
+        data=bytes([200, 0, 0, 0, 0, 0, 0, 0]),
+        is_extended_id=False,
+    )
     assert bridge.handle(unknown) == "rejected.bad_param"
     bridge.advance(2)
     out = bridge.close()
@@ -462,8 +488,11 @@ def test_runner_recording_reproduces_the_run(tmp_path: Path, capsys: pytest.Capt
                 if now >= next_t:
                     t = now - start
                     for m in dbc.encode_command(
-                        {"cmd.base_speed": 20 * math.sin(2 * math.pi * 0.8 * t) + 5,
-                         "cmd.load": 0.3 if int(t / 0.4) % 2 else -0.3, "cmd.mode": "speed"}
+                        {
+                            "cmd.base_speed": 20 * math.sin(2 * math.pi * 0.8 * t) + 5,
+                            "cmd.load": 0.3 if int(t / 0.4) % 2 else -0.3,
+                            "cmd.mode": "speed",
+                        }
                     ):
                         bus.send(m)
                         sent[0] += 1
@@ -490,7 +519,9 @@ def test_runner_recording_reproduces_the_run(tmp_path: Path, capsys: pytest.Capt
     outs = []
     for i in (1, 2):
         answers, again = tmp_path / f"answers{i}.log", tmp_path / f"again{i}.log"
-        res = run([*runner_mod.replay_command(params, rec, answers, runner=RUNNER), "--log", str(again)])
+        res = run(
+            [*runner_mod.replay_command(params, rec, answers, runner=RUNNER), "--log", str(again)]
+        )
         assert res.returncode == 0, res.stderr
         outs.append((answers.read_bytes(), again.read_bytes()))
     assert outs[0] == outs[1] and len(outs[0][1]) > 0
@@ -533,8 +564,11 @@ def test_socketcand_client_disconnect_and_reconnect_lose_nothing(tmp_path: Path)
     assert s["client_connects"] == 2 and s["client_disconnects"] == 2
     assert s["frames_in"] == s["rx_total"] == sent[0] and s["malformed_lines"] == 0
     assert s["timeouts"] >= 1 and s["recoveries"] >= 1
-    speeds = [roles_by_cantools(dbc.by_key[(0x200, False)], m.data)["out.base_speed"]
-              for m in received if m.arbitration_id == 0x200]
+    speeds = [
+        roles_by_cantools(dbc.by_key[(0x200, False)], m.data)["out.base_speed"]
+        for m in received
+        if m.arbitration_id == 0x200
+    ]
     assert speeds and max(speeds) == pytest.approx(7.0)
 
 
@@ -542,14 +576,24 @@ def test_socketcand_client_disconnect_and_reconnect_lose_nothing(tmp_path: Path)
 
 
 BAD = [
-    ('[scenario]\nduration = 1\n[[step]]\nat = 0.1\nfault = "offset"\nsignal = "Nope"\nvalue = 1\n',
-     "s.toml:6: signal: 'Nope' is no feedback signal of gear_rig"),
-    ("[scenario]\nduration = 1\n[[step]]\nat = 0.1\nload = [1, 2]\n",
-     "s.toml:5: load: arrays and inline tables are not used in a scenario"),
-    ('[scenario]\nduration = 1\n[[step]]\nat = 0.1\nparam = "load_offset"\nvalue = "x"\n',
-     "s.toml:6: value: expected a number"),
-    ('[scenario]\nduration = 1\n[[step]]\nat = 0.2\nparam = "load_coulomb_friction"\nvalue = -1\n',
-     "s.toml:6: value: load_coulomb_friction = -1 refused by the rig"),
+    (
+        "[scenario]\nduration = 1\n[[step]]\n"
+        'at = 0.1\nfault = "offset"\nsignal = "Nope"\nvalue = 1\n',
+        "s.toml:6: signal: 'Nope' is no feedback signal of gear_rig",
+    ),
+    (
+        "[scenario]\nduration = 1\n[[step]]\nat = 0.1\nload = [1, 2]\n",
+        "s.toml:5: load: arrays and inline tables are not used in a scenario",
+    ),
+    (
+        '[scenario]\nduration = 1\n[[step]]\nat = 0.1\nparam = "load_offset"\nvalue = "x"\n',
+        "s.toml:6: value: expected a number",
+    ),
+    (
+        "[scenario]\nduration = 1\n[[step]]\n"
+        'at = 0.2\nparam = "load_coulomb_friction"\nvalue = -1\n',
+        "s.toml:6: value: load_coulomb_friction = -1 refused by the rig",
+    ),
 ]
 
 
@@ -561,7 +605,9 @@ def test_bad_scenarios_exit_2_with_one_line(tmp_path: Path, text: str, message: 
     shown = str(scenario)
     py = subprocess.run(
         [*_python(), "replay", str(log), "--model", str(_model(tmp_path)), "--scenario", shown],
-        capture_output=True, text=True, timeout=60,
+        capture_output=True,
+        text=True,
+        timeout=60,
     )
     assert py.returncode == 2 and py.stderr.count("\n") == 1, py.stderr
     assert message.replace("s.toml", shown) in py.stderr
@@ -619,7 +665,9 @@ def test_runner_parameter_frames_recorded_and_replayed(tmp_path: Path) -> None:
     # the replay of the recording: the same answers, but for RxIgnored (GearCounters), which
     # counts the recorded answers the replay reads back
     first = [(m.arbitration_id, bytes(m.data)) for m in read_log(out) if m.arbitration_id != 0x211]
-    second = [(m.arbitration_id, bytes(m.data)) for m in read_log(again) if m.arbitration_id != 0x211]
+    second = [
+        (m.arbitration_id, bytes(m.data)) for m in read_log(again) if m.arbitration_id != 0x211
+    ]
     assert second == first
 
 
@@ -634,9 +682,24 @@ def test_python_run_with_a_scenario_writes_its_verdict(tmp_path: Path) -> None:
     )
     xml = tmp_path / "v.xml"
     res = subprocess.run(
-        [*_python(), "run", "--model", str(_model(tmp_path)), "-i", "virtual", "-c",
-         next_channel("run"), "--scenario", str(scenario), "--junit", str(xml), "--json"],
-        capture_output=True, text=True, timeout=60,
+        [
+            *_python(),
+            "run",
+            "--model",
+            str(_model(tmp_path)),
+            "-i",
+            "virtual",
+            "-c",
+            next_channel("run"),
+            "--scenario",
+            str(scenario),
+            "--junit",
+            str(xml),
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
     )
     assert res.returncode == 3, res.stderr
     out = json.loads(res.stdout)

@@ -19,8 +19,18 @@ def test_output_roles_match_the_bindings() -> None:
 @pytest.mark.parametrize(
     "rig, block, cmd_id, feedback_ids",
     [
-        ("gear", "simple_gear", 0x100, {0x200: 10, 0x201: 10, 0x202: 100, 0x210: 100, 0x211: 100, 0x212: 100}),
-        ("rack", "rack_pinion", 0x110, {0x300: 10, 0x301: 10, 0x302: 100, 0x310: 100, 0x311: 100, 0x312: 100}),
+        (
+            "gear",
+            "simple_gear",
+            0x100,
+            {0x200: 10, 0x201: 10, 0x202: 100, 0x210: 100, 0x211: 100, 0x212: 100},
+        ),
+        (
+            "rack",
+            "rack_pinion",
+            0x110,
+            {0x300: 10, 0x301: 10, 0x302: 100, 0x310: 100, 0x311: 100, 0x312: 100},
+        ),
     ],
 )
 def test_shipped_dbc_layout(

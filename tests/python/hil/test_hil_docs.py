@@ -133,7 +133,10 @@ def test_the_test_campaign_runs_as_written(tmp_path: Path) -> None:
     assert "never DriveMode == disabled from 2.5 s to 3 s (last: 1)" in verdict
     overall = re.search(r"^overall\s+([0-9.e-]+)", res.stdout, re.M)
     assert overall is not None and float(overall.group(1)) <= 1e-3, res.stdout
-    replay_c, replay_py = (tmp_path / "replay-c.xml").read_text(), (tmp_path / "replay-py.xml").read_text()
+    replay_c, replay_py = (
+        (tmp_path / "replay-c.xml").read_text(),
+        (tmp_path / "replay-py.xml").read_text(),
+    )
     assert replay_c == replay_py and 'failures="1"' in replay_c
     # the recording starts with the run (--wait-client): its replay is the live run
     assert replay_c == verdict

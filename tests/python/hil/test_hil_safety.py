@@ -552,7 +552,11 @@ def test_replay_with_every_frame_rejected_fails(
     )
     assert rc == 2 and out == ""
     _one_error_line(
-        err, "all 102 frames were rejected", "rejected.unknown_id 102", "rack_pinion", "rack_rig.dbc"
+        err,
+        "all 102 frames were rejected",
+        "rejected.unknown_id 102",
+        "rack_pinion",
+        "rack_rig.dbc",
     )
     assert _snapshot(d) == before
 

@@ -393,10 +393,10 @@ def _effective_samples(
 ) -> dict[str, float]:
     """Per output, n_eff from the residual of the best-fitting candidate
     (lowest estimation error), else of the baseline."""
-    fitted = [c for c in cands if c.fit is not None]
+    fitted = [(c, c.fit) for c in cands if c.fit is not None]
     if fitted:
-        best = min(fitted, key=lambda c: sum(c.judged_mse.values()))
-        residual = best.fit.residual_after
+        _best, best_fit = min(fitted, key=lambda cf: sum(cf[0].judged_mse.values()))
+        residual = best_fit.residual_after
     else:
         residual = ctx.residual
     n = int(split.validation.sum())

@@ -48,9 +48,12 @@ def _analysis_value(key: str, value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, str)):
         raise ModelFileError(f"[analysis] {key} must be a number or a unit string", parameter=key)
     try:
-        x = float(to_si(value, ANALYSIS_KEYS[key])) if isinstance(value, str) else float(value)
+        si = to_si(value, ANALYSIS_KEYS[key]) if isinstance(value, str) else value
     except (UnitConversionError, TypeError) as exc:
         raise ModelFileError(f"[analysis] {key}: {exc}", parameter=key) from None
+    if isinstance(si, list):  # "[1, 2] s": a list, as a TOML array above
+        raise ModelFileError(f"[analysis] {key} must be a number or a unit string", parameter=key)
+    x = float(si)
     if not (math.isfinite(x) and abs(x) <= MAX_TORQUE_DELAY):
         raise ModelFileError(
             f"[analysis] {key} = {x:g} s is outside [-{MAX_TORQUE_DELAY:g}, "

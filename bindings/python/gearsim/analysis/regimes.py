@@ -33,6 +33,7 @@ it holds at least 1 % of the samples.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -198,7 +199,7 @@ def regime_errors(
     overall = {k: float(np.sqrt(np.mean(r * r))) for k, r in residuals.items()}
     for reg in regimes:
         m = reg.mask
-        entry = {
+        entry: dict[str, Any] = {
             "regime": reg.name,
             "description": reg.description,
             "fraction": reg.fraction,

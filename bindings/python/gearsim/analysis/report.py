@@ -84,6 +84,8 @@ def _full_fit(d: DiagnoseResult, split, say: Callable[[str], None]) -> FitResult
     parameter at full resolution, else a full fit on the same split (kept
     unless its validation error ends above diagnose's)."""
     best = d.best
+    if best is None:
+        raise ValueError("diagnose has no candidate to fit")
     if best.fit is not None and best.fit.complete:
         return best.fit
     full = fit_effect(d.context, best.effect, validation=split, progress=say)
@@ -492,8 +494,9 @@ def _html(meas: Measurement, rounds: list[Round], images: dict[str, bytes], titl
     for i, r in enumerate(rounds):
         if r.diagnosis is not None:
             h.append(_diagnosis_html(i, r.diagnosis))
-        if i + 1 < len(rounds) and rounds[i + 1].fit is not None:
-            h.append(_fit_html(i + 1, rounds[i + 1].fit))
+        next_fit = rounds[i + 1].fit if i + 1 < len(rounds) else None
+        if next_fit is not None:
+            h.append(_fit_html(i + 1, next_fit))
     h.append(
         "<p class='small'>nrmse = rms(measured - simulated) / std(measured) per output; the "
         "overall nrmse is their mean (docs/measurement-format.md). Validation: the record is cut "

@@ -206,7 +206,8 @@ class Gap(NamedTuple):
     """A hole in a time axis: ``missing`` samples of step dt lack between the
     samples at ``start`` and ``end`` (s); ``index`` is the sample before it."""
 
-    index: int
+    # the field shadows tuple.index (mypy objects); it is public API, so it stays
+    index: int  # type: ignore[assignment]
     start: float
     end: float
     missing: int

@@ -150,9 +150,11 @@ def build_context(
     if meas.has_temperature:
         temp, tsrc = meas["temperature"], "measured"
     else:
-        temp = sig.get("temperature")
+        simulated = sig.get("temperature")
         tsrc = "simulated"
-        if temp is None:
+        if simulated is not None:
+            temp = simulated
+        else:
             temp = np.full(meas.n, float(mk.block_values(model).get("initial_temperature", 300.0)))
     n = meas.n
     step = max(1, int(np.ceil(n / max_rows)))

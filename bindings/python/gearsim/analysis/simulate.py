@@ -115,7 +115,7 @@ def rig_steps_of(meas: Measurement) -> RigSteps | None:
     base = meas.time_base
     if base is None or not base.is_rig:
         return None
-    h, n = float(base.rig_dt), base.steps_per_row
+    h, n = float(base.rig_step), base.steps_per_row
     since = meas[INPUTS_SINCE]
     first_after = np.ceil(n - (meas.time - since) / h - 0.5)
     steps_before = np.clip(first_after, 0, n).astype(np.int64)
@@ -245,9 +245,10 @@ def prepare_inputs(meas: Measurement, input_filter: float | str | None = "auto")
     spec = meas.spec
     speed = cond(spec.speed_input)
     contact = None
-    if input_filter == "auto" and cutoffs[spec.speed_input] is not None:
+    speed_cutoff = cutoffs[spec.speed_input]
+    if input_filter == "auto" and speed_cutoff is not None:
         fc = contact_cutoff(meas[spec.speed_input], fs)
-        if fc is not None and fc > cutoffs[spec.speed_input]:
+        if fc is not None and fc > speed_cutoff:
             cutoffs[f"{spec.speed_input} ({CONTACT_LABEL})"] = fc
             contact = zero_phase_lowpass(meas[spec.speed_input], fc, fs)
     load = cond(spec.load_input)

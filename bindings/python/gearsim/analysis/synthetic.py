@@ -38,7 +38,11 @@ class Excitation:
 
 
 def _smooth_steps(
-    rng: np.random.Generator, t: np.ndarray, levels_fn, dur=(0.25, 0.9), ramp=(0.08, 0.25)
+    rng: np.random.Generator,
+    t: np.ndarray,
+    levels_fn,
+    dur: tuple[float, float] = (0.25, 0.9),
+    ramp: tuple[float, float] = (0.08, 0.25),
 ) -> np.ndarray:
     """Piecewise-constant levels joined by raised-cosine ramps (C1-continuous);
     each ramp takes at most 80 % of its segment."""
@@ -50,7 +54,7 @@ def _smooth_steps(
     edges_a = np.asarray(edges)
     levels = np.asarray(levels_fn(len(edges)), dtype=float)
     ramps = np.minimum(
-        rng.uniform(*ramp, size=len(edges)), 0.8 * np.diff(np.append(edges_a, np.inf))
+        rng.uniform(ramp[0], ramp[1], size=len(edges)), 0.8 * np.diff(np.append(edges_a, np.inf))
     )
     tau = t - t[0]
     k = np.clip(np.searchsorted(edges_a, tau, side="right") - 1, 0, len(edges) - 1)
@@ -141,15 +145,16 @@ def synthesize(
     block = mk.block_name(model)
     spec = RIG_SPECS[block]
     dt = float(exc.time[1] - exc.time[0])
-    use_t = exc.temperature is not None
+    temperature = exc.temperature
+    use_t = temperature is not None
     overrides: dict[str, Any] = {"base_speed_ramp": True}
     n_sub = contact_substeps(model, dt)
     if n_sub:
         overrides["contact_substeps"] = n_sub
     rig = model.rig(dt=dt, temperature_input=use_t, **overrides)
     kw = {"base_speed": half_sample(exc.base_speed, +1), "load": exc.load}
-    if use_t:
-        kw["measured_temperature"] = exc.temperature
+    if temperature is not None:
+        kw["measured_temperature"] = temperature
     out = rig.run(**kw)
     follower_speed = half_sample(np.asarray(out.follower_speed), -1)
 
@@ -174,8 +179,8 @@ def synthesize(
             follower_speed, sensors.speed_resolution, noise=sensors.speed_noise
         ),
     }
-    if use_t:
-        cols["temperature"] = exc.temperature + sensors.temperature_noise * rng.standard_normal(
+    if temperature is not None:
+        cols["temperature"] = temperature + sensors.temperature_noise * rng.standard_normal(
             exc.time.size
         )
     return Measurement.from_arrays(block, exc.time, path=path, **cols)

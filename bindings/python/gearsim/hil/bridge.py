@@ -407,7 +407,9 @@ class Bridge:
         scenario = Scenario(path, self._table, self.rig.kind)
         err = ffi.new("gs_hil_error *")
         if lib.gs_hil_attach_scenario(self._b, scenario._c, err) != lib.GS_HIL_OK:
-            raise ScenarioError(ffi.string(err.message).decode("utf-8", "replace"), parameter="scenario")
+            raise ScenarioError(
+                ffi.string(err.message).decode("utf-8", "replace"), parameter="scenario"
+            )
         self.scenario = scenario  # the C bridge points into it: kept alive here
 
     @property

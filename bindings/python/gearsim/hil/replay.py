@@ -444,7 +444,9 @@ def replay(
     the replay goes on to the scenario's end); ``junit``: where its verdict
     goes (atomically), which is then also ``ReplayResult.junit``."""
     if out is not None:
-        check_output(out, [log, dbc if not isinstance(dbc, RigDbc) else None, scenario], option="--out")
+        check_output(
+            out, [log, dbc if not isinstance(dbc, RigDbc) else None, scenario], option="--out"
+        )
         log_writer_format(out)
     if junit is not None:
         check_output(junit, [log, scenario, out], option="--junit")

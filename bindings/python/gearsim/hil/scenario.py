@@ -58,8 +58,13 @@ class Scenario:
         self._c = ffi.new("gs_hil_scenario *")
         err = ffi.new("gs_hil_error *")
         code = lib.GS_RIG_SIMPLE_GEAR if block == "simple_gear" else lib.GS_RIG_RACK_PINION
-        if lib.gs_hil_scenario_parse(self._c, text, len(text), self._name, table, code, err) != lib.GS_HIL_OK:
-            raise ScenarioError(ffi.string(err.message).decode("utf-8", "replace"), parameter="scenario")
+        if (
+            lib.gs_hil_scenario_parse(self._c, text, len(text), self._name, table, code, err)
+            != lib.GS_HIL_OK
+        ):
+            raise ScenarioError(
+                ffi.string(err.message).decode("utf-8", "replace"), parameter="scenario"
+            )
 
     @property
     def name(self) -> str:

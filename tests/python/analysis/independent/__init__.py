@@ -12,9 +12,9 @@ See docs/testing-python.md.
 """
 
 from .generator import (
-    RIG_EFFECT_TRUTHS,
     DT,
     PEAKS,
+    RIG_EFFECT_TRUTHS,
     RIGS,
     TRUTHS,
     Record,

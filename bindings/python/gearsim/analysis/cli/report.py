@@ -103,3 +103,4 @@ def execute(args: argparse.Namespace) -> int:
         if summary["conclusion"]:
             print(summary["conclusion"])
         print(f"wrote {printable(paths['html'], limit=200)}")
+    return 0

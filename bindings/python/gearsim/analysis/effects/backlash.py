@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -166,7 +166,7 @@ class Backlash(Effect):
     )
     costly = True
     excitation = "dwell at zero speed, then reverse the load slowly"
-    separated_from: dict[str, str] = {}
+    separated_from: ClassVar[Mapping[str, str]] = {}
     #: what separates its own parameters (gap, contact stiffness, damping)
     internal_excitation = (
         "reverse the load slowly (the gap shows) and quickly (contact stiffness and damping show)"
@@ -343,7 +343,11 @@ class Backlash(Effect):
         return out
 
     def evidence(self, ctx: Any, screening: Screening, model: Any = None) -> dict[str, Any]:
+        if not isinstance(screening, BacklashScreening):
+            raise TypeError(f"{self.name}: evidence needs this effect's own screening")
         be = screening.evidence
+        if be is None:  # screen() sets it
+            raise ValueError(f"{self.name}: the screening lacks its evidence")
         ms = be.window * ctx.meas.dt * 1e3
         conc = {k: float(v) for k, v in be.concentration.items()}
         share = {k: float(v) * be.time_fraction for k, v in conc.items()}

@@ -337,6 +337,7 @@ class Compliance(Effect):
             zeta = float(res.damping_ratio) if np.isfinite(res.damping_ratio) else 0.05
             # a lightly damped ring runs through many cycles: a 1 % frequency
             # error turns its phase around, so look close first
+            z_grid: tuple[float, ...]
             f_grid, z_grid = (0.98, 0.99, 1.0, 1.01, 1.02), ()
             zeta = min(max(zeta, 0.005), 0.5)
         else:
@@ -452,7 +453,11 @@ class Compliance(Effect):
         return out
 
     def evidence(self, ctx: Any, screening: Screening, model: Any = None) -> dict[str, Any]:
+        if not isinstance(screening, ComplianceScreening):
+            raise TypeError(f"{self.name}: evidence needs this effect's own screening")
         res, tr = screening.resonance, screening.transient
+        if res is None or tr is None:  # screen() sets both
+            raise ValueError(f"{self.name}: the screening lacks its resonance or transient")
         ev: dict[str, Any] = {
             "signature": self.signature_text,
             "peak_hz": res.peak_hz,

@@ -132,11 +132,10 @@ class StribeckFriction(Effect):
         one kept): the profile is coarse at the lowest speeds."""
         prof = self.profile(ctx)
         vs0 = prof.stribeck_speed if prof.stribeck_speed > 0 else 0.05 * speed_scale(ctx)
-        best, best_vs = None, vs0
-        for vs in (vs0 / 3.0, vs0, 3.0 * vs0):
-            sr = self.regression(ctx, self._own(ctx, vs))
-            if best is None or sr.nrmse < best.nrmse:
-                best, best_vs = sr, vs
+        # the first of the lowest error (min keeps the first of equals)
+        speeds = (vs0 / 3.0, vs0, 3.0 * vs0)
+        tried = [(self.regression(ctx, self._own(ctx, vs)), vs) for vs in speeds]
+        best, best_vs = min(tried, key=lambda t: t[0].nrmse)
         return StribeckScreening(float(best.nrmse), best, None, float(best_vs), prof)
 
     def parameters(self, ctx: Any, screening: Screening | None) -> list[FitParam]:

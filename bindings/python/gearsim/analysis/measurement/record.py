@@ -104,6 +104,13 @@ class RecordedTimeBase:
     def is_rig(self) -> bool:
         return self.kind == "rig"
 
+    @property
+    def rig_step(self) -> float:
+        """rig_dt (s) of a rig-time base; a wall-clock base has none."""
+        if self.rig_dt is None:
+            raise ValueError(f"a time base of kind {self.kind!r} has no rig step")
+        return self.rig_dt
+
 
 OPTIONAL_INPUTS: tuple[str, ...] = tuple(col.name for col in OPTIONAL)
 

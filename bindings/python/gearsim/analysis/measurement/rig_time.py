@@ -136,7 +136,7 @@ def check_time_base(
             "rig step as the first line says"
         )
         return None
-    ratio = meas.dt / base.rig_dt
+    ratio = meas.dt / base.rig_step
     steps = round(ratio)
     if steps < 1 or abs(ratio - steps) > _SUBSTEP_TOLERANCE * steps:
         raise MeasurementError(
@@ -145,7 +145,7 @@ def check_time_base(
             file=shown,
             line=marker.line,
         )
-    _check_inputs_since(meas, base.rig_dt, shown, line_of)
+    _check_inputs_since(meas, base.rig_step, shown, line_of)
     notes.info(
         f"rig time (line {marker.line}): the model is stepped every {base.rig_dt:g} s, "
         f"{steps} steps per row"

@@ -332,7 +332,7 @@ def _column(
         )
     i = hits[0]
     col = Column(canonical, i, fields[i], unit=parsed[i][1])
-    if factor is not None:
+    if factor is not None and fm is not None:  # a factor is only read off the mapping fm
         if not np.isfinite(factor) or factor == 0.0:
             raise MeasurementError(
                 f"scale factor '{printable(fm.group('factor'))}' of the mapping for "

@@ -46,6 +46,7 @@ def validate_table(
     d = _check_increasing(t, where, line_of, tname)
     data = {name: table[:, j].copy() for j, name in enumerate(names)}
     r = _grid_break(t, d)
+    notes: list[str]
     if r is None:
         dt, notes = float((t[-1] - t[0]) / (n - 1)), []
     elif not resample:

@@ -14,11 +14,12 @@ Hooked into the ``gearsim`` command by gearsim/cli.py through
 
 Exit status: 0 success, 2 bad input (one line on standard error, no
 traceback), 1 internal failure (one line; the traceback only with
-GEARSIM_DEBUG set), 3 a scenario expectation failed (run, replay), 130 interrupted, 141 when standard output is a pipe
-closed by its reader (``... -o - | head``; nothing printed). Without the hil
-extra (python-can, cantools) every command exits with status 2 and one line
-naming it: ``pip install 'gearsim[hil]'``. ``--json`` prints exactly one JSON
-object on standard output.
+GEARSIM_DEBUG set), 3 a scenario expectation failed (run, replay), 130
+interrupted, 141 when standard output is a pipe closed by its reader
+(``... -o - | head``; nothing printed). Without the hil extra (python-can,
+cantools) every command exits with status 2 and one line naming it:
+``pip install 'gearsim[hil]'``. ``--json`` prints exactly one JSON object on
+standard output.
 
 Outputs (``-o``, ``--log``) are checked before any work starts (not an input of
 the command, not a directory, in a writable directory, a log format python-can

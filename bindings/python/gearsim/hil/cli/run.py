@@ -213,10 +213,16 @@ def execute(args: argparse.Namespace) -> int:
     if args.log is not None:
         from ..replay import log_writer_format
 
-        check_output(args.log, inputs(args, "model", "dbc", "can_config", "scenario"), option="--log")
+        check_output(
+            args.log, inputs(args, "model", "dbc", "can_config", "scenario"), option="--log"
+        )
         log_writer_format(args.log, option="--log")
     if args.junit is not None:
-        check_output(args.junit, inputs(args, "model", "dbc", "can_config", "scenario", "log"), option="--junit")
+        check_output(
+            args.junit,
+            inputs(args, "model", "dbc", "can_config", "scenario", "log"),
+            option="--junit",
+        )
     model = load_model(args.model)
     dbc = dbc_for(args, model.block)
     config = bus_config(args)

@@ -120,7 +120,9 @@ def execute(args: argparse.Namespace) -> int:
     if args.log is not None:
         check_output(args.log, inputs(args, "model", "can_config", "scenario"), option="--log")
     if args.junit is not None:
-        check_output(args.junit, inputs(args, "model", "can_config", "scenario", "log"), option="--junit")
+        check_output(
+            args.junit, inputs(args, "model", "can_config", "scenario", "log"), option="--junit"
+        )
     path, which = _choose(runner, args.runner_path)
     model = load_model(args.model)
     if args.print_command:
