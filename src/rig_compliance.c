@@ -51,17 +51,21 @@ void gs_rig_compliant_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss
             ripple = gs_rig_ripple_torque(r, st->base_angle + GS_R(0.5) * h * w);
         }
         const gs_real spring = r->stiffness * phi - ripple;
-        const gs_mesh_friction_ law_now =
-            r->friction_regularised ? gs_rig_regularised_law(r, law, st->block.follower_torque, a * w) : *law;
+        gs_mesh_friction_ law_now;
+        const gs_mesh_friction_ *law_k = law;
+        if (r->friction_regularised) {
+            law_now = gs_rig_regularised_law(r, law, st->block.follower_torque, a * w);
+            law_k = &law_now;
+        }
         geared_end e =
-            gs_rig_geared_solve(r, &law_now, h, inv_h, &r->geared_base, w, spring + g * (w_d - GS_R(0.5) * w), push);
+            gs_rig_geared_solve(r, law_k, h, inv_h, &r->geared_base, w, spring + g * (w_d - GS_R(0.5) * w), push);
         gs_real w_adv = GS_R(0.5) * (w + e.w);
         /* the dissipative torque on the base gear (base-referred) opposes w',
          * and so the mean speed too, unless the gear stops or turns within
          * the sub-step */
         if (!(w * e.w > GS_R(0.0)) &&
             (m->mu_base * e.w + a * (e.coulomb + m->mu_follower * a * e.w + e.tau_mesh)) * w_adv < GS_R(0.0)) {
-            e = gs_rig_geared_solve(r, &law_now, h, inv_h, &r->geared_base_end, w, spring + g * w_d, push);
+            e = gs_rig_geared_solve(r, law_k, h, inv_h, &r->geared_base_end, w, spring + g * w_d, push);
             w_adv = e.w;
         }
         const gs_real phi_end = phi + h * (w_d - w_adv);

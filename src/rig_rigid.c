@@ -149,10 +149,14 @@ void gs_rig_rigid_torque_driven(const rig_consts_ *r, gs_rig_state *st, const gs
          * symplectic Euler, so the ripple's potential energy does not drift */
         drive -= gs_rig_ripple_torque(r, st->base_angle);
     }
-    const gs_mesh_friction_ law_now =
-        r->friction_regularised ? gs_rig_regularised_law(r, law, st->block.follower_torque, a * w) : *law;
+    gs_mesh_friction_ law_now;
+    const gs_mesh_friction_ *law_k = law;
+    if (r->friction_regularised) {
+        law_now = gs_rig_regularised_law(r, law, st->block.follower_torque, a * w);
+        law_k = &law_now;
+    }
     const geared_end e =
-        gs_rig_geared_solve(r, &law_now, r->dt, r->inv_dt, &r->geared_base, w, drive, in->load + r->load_offset);
+        gs_rig_geared_solve(r, law_k, r->dt, r->inv_dt, &r->geared_base, w, drive, in->load + r->load_offset);
     const gs_real w_f = a * e.w;
     const gs_real tau_b = m->mu_base * e.w + a * (e.tau_mesh - e.t_f);
     const gs_real tau_f = e.t_f + m->mu_follower * w_f;
