@@ -271,13 +271,8 @@ void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
             if (law_per_substep && k > 0) {
                 gs_mesh_friction_law(m, ctx, t_f, law);
             }
-            /* one call site, so that the sub-step solve is inlined once */
             gs_mesh_friction_ law_now;
-            const gs_mesh_friction_ *law_k = law;
-            if (r->friction_regularised) {
-                law_now = gs_rig_regularised_law(r, law, t_f, w_f);
-                law_k = &law_now;
-            }
+            const gs_mesh_friction_ *law_k = gs_rig_step_law(r, law, t_f, w_f, &law_now);
             e = substep_friction(r, law_k, &c, w_f, w_b_free, momentum, &tau_mesh, &t_f);
         }
         /* x moves with the relative speed the contact was solved for: the end

@@ -52,11 +52,7 @@ void gs_rig_compliant_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss
         }
         const gs_real spring = r->stiffness * phi - ripple;
         gs_mesh_friction_ law_now;
-        const gs_mesh_friction_ *law_k = law;
-        if (r->friction_regularised) {
-            law_now = gs_rig_regularised_law(r, law, st->block.follower_torque, a * w);
-            law_k = &law_now;
-        }
+        const gs_mesh_friction_ *law_k = gs_rig_step_law(r, law, st->block.follower_torque, a * w, &law_now);
         geared_end e =
             gs_rig_geared_solve(r, law_k, h, inv_h, &r->geared_base, w, spring + g * (w_d - GS_R(0.5) * w), push);
         gs_real w_adv = GS_R(0.5) * (w + e.w);

@@ -134,6 +134,19 @@ gs_real gs_rig_creep_level(const rig_consts_ *r, gs_real w_f);
  * friction; a weaker set-valued law is still passive. */
 gs_mesh_friction_ gs_rig_regularised_law(const rig_consts_ *r, const gs_mesh_friction_ *law, gs_real t_f, gs_real w_f);
 
+/* The meshing law a free path uses this (sub-)step: law itself, or with
+ * load_friction_regularised its regularised copy in *scratch. Inline, so
+ * that the switch off costs one test. */
+static inline const gs_mesh_friction_ *gs_rig_step_law(const rig_consts_ *r, const gs_mesh_friction_ *law, gs_real t_f,
+                                                       gs_real w_f, gs_mesh_friction_ *scratch)
+{
+    if (!r->friction_regularised) {
+        return law;
+    }
+    *scratch = gs_rig_regularised_law(r, law, t_f, w_f);
+    return scratch;
+}
+
 /* The ripple torque (physics.md 11.5) the base shaft must add at base angle
  * theta: per-revolution harmonics of theta, per-tooth harmonics of Z*theta. */
 gs_real gs_rig_ripple_torque(const rig_consts_ *r, gs_real theta);

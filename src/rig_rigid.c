@@ -150,11 +150,7 @@ void gs_rig_rigid_torque_driven(const rig_consts_ *r, gs_rig_state *st, const gs
         drive -= gs_rig_ripple_torque(r, st->base_angle);
     }
     gs_mesh_friction_ law_now;
-    const gs_mesh_friction_ *law_k = law;
-    if (r->friction_regularised) {
-        law_now = gs_rig_regularised_law(r, law, st->block.follower_torque, a * w);
-        law_k = &law_now;
-    }
+    const gs_mesh_friction_ *law_k = gs_rig_step_law(r, law, st->block.follower_torque, a * w, &law_now);
     const geared_end e =
         gs_rig_geared_solve(r, law_k, r->dt, r->inv_dt, &r->geared_base, w, drive, in->load + r->load_offset);
     const gs_real w_f = a * e.w;
