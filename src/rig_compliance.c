@@ -1,9 +1,8 @@
 /* rig_compliance.c - the rig's compliant base shaft (rig_internal.h): a
  * spring and damper between the speed-driven drive and the base gear, which
- * the geared solve (rig_rigid.c) couples to the driven side in each of the
+ * the geared solve (rig_geared.h) couples to the driven side in each of the
  * shaft's sub-steps. */
-#include "rig_internal.h"
-#include "gs_math.h"
+#include "rig_geared.h"
 
 /* The compliant shaft (speed-driven base, rigid mesh): the drive turns at
  * the input speed, ramped linearly from the last sample over the step; a

@@ -3,8 +3,9 @@
  * inertia (physics.md 11):
  *  - rig.c: parameters (defaults, validation), the constants init derives,
  *    init, reset, info, run, and gs_rig_step, which picks the step path;
- *  - rig_rigid.c: the rigid mesh (speed-driven base; the geared solve of a
- *    free base gear, for a torque-driven base and the compliant shaft);
+ *  - rig_rigid.c: the rigid mesh, speed-driven and torque-driven base;
+ *  - rig_geared.h: the geared solve of a free base gear (inline), for a
+ *    torque-driven base and the compliant shaft;
  *  - rig_compliance.c: the compliant base shaft;
  *  - rig_backlash.c: the contact sub-steps with the set-valued friction;
  *  - rig_terms.c: the friction level and the torque ripple the paths share.
@@ -14,7 +15,8 @@
  *    torque uses the filtered backward-difference base acceleration;
  *  - rigid mesh, torque-driven base: one degree of freedom, backward Euler;
  *    the viscous terms implicit, the meshing loss and the load's Coulomb
- *    friction set-valued (closed form per power-flow piece, gs_rig_geared_solve);
+ *    friction set-valued (closed form per power-flow piece, gs_rig_geared_solve
+ *    in rig_geared.h);
  *  - compliant base shaft: the same solve for the base gear in sub-steps of
  *    the shaft's implicit midpoint rule;
  *  - backlash: the follower (and a torque-driven base) carry their own
@@ -171,21 +173,6 @@ void gs_rig_rigid_speed_driven(const rig_consts_ *r, gs_rig_state *st, const gs_
  * The caller advances the angles. */
 void gs_rig_rigid_torque_driven(const rig_consts_ *r, gs_rig_state *st, const gs_mesh_friction_ *law,
                                 const gs_rig_input *in, gs_rig_output *out);
-
-/* What the geared solve (rig_rigid.c) leaves at the end of a (sub-)step. */
-typedef struct {
-    gs_real w;        /* base speed at the end */
-    gs_real t_f;      /* net follower torque T_F */
-    gs_real tau_mesh; /* the meshing loss, follower-referred */
-    gs_real coulomb;  /* the load's Coulomb torque that acted (against the follower's motion) */
-} geared_end;
-
-/* A base gear geared rigidly to the driven side over a (sub-)step h
- * (inv_h = 1/h) from base speed w (rig_rigid.c, with its derivation): drive
- * is the explicit torque on the base gear, base its mass and implicit slope
- * (geared_base or geared_base_end), push the driven side's load and offset. */
-geared_end gs_rig_geared_solve(const rig_consts_ *r, const gs_mesh_friction_ *law, gs_real h, gs_real inv_h,
-                               const geared_base_ *base, gs_real w, gs_real drive, gs_real push);
 
 /* The compliant base shaft (rig_compliance.c; speed-driven base, rigid
  * mesh) in its sub-steps; w_d_start is the drive's speed at the step's
