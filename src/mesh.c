@@ -101,18 +101,6 @@ void gs_mesh_reset(const gs_mesh_ *m, gs_block_state *st)
     st->contact_locked = 0;
 }
 
-void gs_mesh_thermal_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, gs_real loss_W, gs_real q_W,
-                          gs_real ambient_K, gs_real conductance_W_K)
-{
-    if (!m->thermal_enabled) {
-        return;
-    }
-    /* C dT/dt = P + q + G (T_amb - T): the ambient term implicit, the rest explicit. */
-    const gs_real a = dt / m->thermal_mass;
-    st->temperature =
-        (st->temperature + a * (loss_W + q_W + conductance_W_K * ambient_K)) / (GS_R(1.0) + a * conductance_W_K);
-}
-
 void gs_mesh_block_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, const gs_mesh_in_ *in, gs_mesh_out_ *out)
 {
     gs_loss_ctx_ ctx;

@@ -185,8 +185,17 @@ void gs_contact_prepare(const gs_mesh_ *m, gs_real h, gs_real inv_mass, gs_conta
 
 /* Thermal mass: explicit heat flow q_W, or an ambient path through
  * conductance g_W_K treated implicitly (stable for any thermal mass). */
-void gs_mesh_thermal_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, gs_real loss_W, gs_real q_W,
-                          gs_real ambient_K, gs_real conductance_W_K);
+static inline void gs_mesh_thermal_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, gs_real loss_W, gs_real q_W,
+                                        gs_real ambient_K, gs_real conductance_W_K)
+{
+    if (!m->thermal_enabled) {
+        return;
+    }
+    /* C dT/dt = P + q + G (T_amb - T): the ambient term implicit, the rest explicit. */
+    const gs_real a = dt / m->thermal_mass;
+    st->temperature =
+        (st->temperature + a * (loss_W + q_W + conductance_W_K * ambient_K)) / (GS_R(1.0) + a * conductance_W_K);
+}
 
 /* Block-level step shared by both blocks: rigid (form A) or backlash (form C). */
 typedef struct {

@@ -410,16 +410,18 @@ void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *st, const gs_rig_inp
     out->contact_force = GS_R(0.0);
     if (m->backlash || r->compliant || r->base_drive == GS_BASE_TORQUE_DRIVEN) {
         /* a free driven side or base gear: the meshing loss as a friction element */
-        gs_mesh_friction_ law = r->loss_law;
+        const gs_mesh_friction_ *law = &r->loss_law;
+        gs_mesh_friction_ law_now;
         if (!r->loss_static) {
-            gs_mesh_friction_law(m, ctx, st->block.follower_torque, &law);
+            gs_mesh_friction_law(m, ctx, st->block.follower_torque, &law_now);
+            law = &law_now;
         }
         if (m->backlash) {
-            gs_rig_backlash_step(r, st, ctx, &law, in, out);
+            gs_rig_backlash_step(r, st, ctx, law, in, out);
         } else if (r->compliant) {
-            gs_rig_compliant_step(r, st, ctx, &law, in, w_drive_start, out);
+            gs_rig_compliant_step(r, st, ctx, law, in, w_drive_start, out);
         } else {
-            gs_rig_rigid_torque_driven(r, st, &law, in, out);
+            gs_rig_rigid_torque_driven(r, st, law, in, out);
             st->base_angle += r->dt * st->base_speed;
             st->follower_position += r->dt * st->follower_speed;
         }

@@ -224,7 +224,7 @@ static substep_end substep_friction(const rig_consts_ *r, const gs_mesh_friction
     return e;
 }
 
-void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, gs_mesh_friction_ *law,
+void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_mesh_friction_ *law,
                           const gs_rig_input *in, gs_rig_output *out)
 {
     const gs_mesh_ *m = &r->mesh;
@@ -235,6 +235,7 @@ void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
     const int free_follower = !law->lossy && !r->stribeck && !(r->load_coulomb > GS_R(0.0));
     /* the 2-D table reads its efficiency at the last sub-step's base load */
     const int law_per_substep = m->friction == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY;
+    gs_mesh_friction_ table_law; /* its law after the first sub-step */
     const gs_real w_b_start = st->base_speed;
     const gs_real w_f_start = st->follower_speed;
     const gs_real push_h = h * (in->load + r->load_offset);
@@ -269,7 +270,8 @@ void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
             e = contact_moving(r, &c, w_b_free, momentum * r->inv_driven_inertia_sub);
         } else {
             if (law_per_substep && k > 0) {
-                gs_mesh_friction_law(m, ctx, t_f, law);
+                gs_mesh_friction_law(m, ctx, t_f, &table_law);
+                law = &table_law;
             }
             gs_mesh_friction_ law_now;
             const gs_mesh_friction_ *law_k = gs_rig_step_law(r, law, t_f, w_f, &law_now);

@@ -176,15 +176,15 @@ void gs_rig_rigid_torque_driven(const rig_consts_ *r, gs_rig_state *st, const gs
 
 /* The compliant base shaft (rig_compliance.c; speed-driven base, rigid
  * mesh) in its sub-steps; w_d_start is the drive's speed at the step's
- * start. The 2-D table's law is updated in *law per sub-step. Advances the
- * angles. */
-void gs_rig_compliant_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, gs_mesh_friction_ *law,
-                           const gs_rig_input *in, gs_real w_d_start, gs_rig_output *out);
+ * start. law is the step's; the 2-D table's is read again per sub-step.
+ * Advances the angles. */
+void gs_rig_compliant_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx,
+                           const gs_mesh_friction_ *law, const gs_rig_input *in, gs_real w_d_start, gs_rig_output *out);
 
 /* Backlash (rig_backlash.c): the contact sub-steps of either base drive.
- * The 2-D table's law is updated in *law per sub-step. Advances the angles
- * and the contact state. */
-void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, gs_mesh_friction_ *law,
+ * law is the step's; the 2-D table's is read again per sub-step. Advances
+ * the angles and the contact state. */
+void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_mesh_friction_ *law,
                           const gs_rig_input *in, gs_rig_output *out);
 
 #endif /* GS_RIG_INTERNAL_H */
