@@ -250,6 +250,17 @@ static void compliance_fill(rig_consts_ *r, const gs_rig_params *p)
     r->geared_base_end.mass = r->base_inertia + h * r->geared_base_end.visc;
     r->geared_follower_visc = a * a * r->mesh.mu_follower;
     r->geared_follower_mass = a * a * r->driven_inertia + h * r->geared_follower_visc;
+    /* the same expressions as gs_rig_geared_solve's, so the same bits */
+    r->geared_fixed = r->loss_static && !r->friction_regularised && !r->stribeck;
+    r->geared_hf = h * gs_abs(a) * r->load_coulomb;
+    r->geared_l_fd = GS_R(1.0) - r->loss_law.k_fd;
+    r->geared_l_bd = GS_R(1.0) + r->loss_law.k_bd;
+    r->geared_hc = h * gs_abs(a) * r->loss_law.c0;
+    geared_base_ *bases[2] = {&r->geared_base, &r->geared_base_end};
+    for (int i = 0; i < 2; ++i) {
+        bases[i]->den_fd = r->geared_l_fd * r->geared_follower_mass + bases[i]->mass;
+        bases[i]->den_bd = r->geared_l_bd * r->geared_follower_mass + bases[i]->mass;
+    }
 }
 
 /* a = A*cos(phi), b = A*sin(phi) of each harmonic. */

@@ -49,32 +49,44 @@ static inline geared_end gs_rig_geared_solve(const rig_consts_ *r, const gs_mesh
     const gs_real a = m->inv_ratio;
     const gs_real a_abs = gs_abs(a);
     const gs_real w_f = a * w;
-    const gs_real level = friction_level(r, w_f);
-    /* Regularised, the load's friction is a damper (the secant of the smooth
-     * law at the start speed, regularised_friction.h) on the end speed, an
-     * addition to mu_F, and no set-valued bound. */
-    gs_real follower_visc = r->geared_follower_visc;
-    gs_real follower_mass = r->geared_follower_mass;
-    gs_real bound = level;
-    gs_real creep = GS_R(0.0);
-    if (r->friction_regularised) {
-        creep = gs_creep_damping(level, w_f, r->inv_load_speed_threshold);
-        follower_visc += a * a * creep;
-        follower_mass += h * a * a * creep;
-        bound = GS_R(0.0);
-    }
     /* In increments dw = w' - w, so that the momenta J*w, large against a
      * step's change, do not round the speed (float drifted by 1e-7 per step):
      * each piece is n + sigma-terms = (lambda*M_f + M_b)*dw with
-     * n = lambda*(h*a*push - h*a^2*mu_F*w) + h*drive - h*(mu_B + slope)*w. */
-    const gs_real hf = h * a_abs * bound;
-    const gs_real hc = h * a_abs * law->c0;
+     * n = lambda*(h*a*push - h*a^2*mu_F*w) + h*drive - h*(mu_B + slope)*w,
+     * hf = h*|a|*bound and hc = h*|a|*c0. */
+    gs_real level, bound, hf, l_fd, l_bd, hc, den_fd, den_bd;
+    gs_real follower_visc = r->geared_follower_visc;
+    gs_real creep = GS_R(0.0);
+    if (r->geared_fixed) { /* law is r->loss_law, h the solve's at init */
+        level = bound = r->load_coulomb;
+        hf = r->geared_hf;
+        l_fd = r->geared_l_fd;
+        l_bd = r->geared_l_bd;
+        hc = r->geared_hc;
+        den_fd = base->den_fd;
+        den_bd = base->den_bd;
+    } else {
+        level = friction_level(r, w_f);
+        /* Regularised, the load's friction is a damper (the secant of the
+         * smooth law at the start speed, regularised_friction.h) on the end
+         * speed, an addition to mu_F, and no set-valued bound. */
+        gs_real follower_mass = r->geared_follower_mass;
+        bound = level;
+        if (r->friction_regularised) {
+            creep = gs_creep_damping(level, w_f, r->inv_load_speed_threshold);
+            follower_visc += a * a * creep;
+            follower_mass += h * a * a * creep;
+            bound = GS_R(0.0);
+        }
+        hf = h * a_abs * bound;
+        l_fd = GS_R(1.0) - law->k_fd;
+        l_bd = GS_R(1.0) + law->k_bd;
+        hc = h * a_abs * law->c0;
+        den_fd = l_fd * follower_mass + base->mass;
+        den_bd = l_bd * follower_mass + base->mass;
+    }
     const gs_real follower = h * (a * push - follower_visc * w);
     const gs_real own = h * (drive - base->visc * w);
-    const gs_real l_fd = GS_R(1.0) - law->k_fd;
-    const gs_real l_bd = GS_R(1.0) + law->k_bd;
-    const gs_real den_fd = l_fd * follower_mass + base->mass;
-    const gs_real den_bd = l_bd * follower_mass + base->mass;
     gs_real w_end = GS_R(0.0);
     gs_real n_fd = l_fd * (follower - hf) + own - hc;
     gs_real n_bd = l_bd * (follower - hf) + own - hc;

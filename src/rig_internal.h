@@ -36,10 +36,14 @@
 #include "mesh.h"
 
 /* The base gear's side of the geared solve: J_B + h*visc and visc, the
- * implicit slope of the torques on it (viscous, and the compliant shaft's). */
+ * implicit slope of the torques on it (viscous, and the compliant shaft's);
+ * and, where init fixes the law and the driven side (geared_fixed), the
+ * two power-flow pieces' masses lambda*M_f + M_b (rig_geared.h). */
 typedef struct {
     gs_real mass;
     gs_real visc;
+    gs_real den_fd; /* (1 - k_fd)*M_f + mass */
+    gs_real den_bd; /* (1 + k_bd)*M_f + mass */
 } geared_base_;
 
 /* What init derives for a rig; the public gs_rig_consts is an opaque view of
@@ -70,6 +74,15 @@ typedef struct {
     geared_base_ geared_base_end;
     gs_real geared_follower_mass; /* a^2*(J_F + h*mu_F) */
     gs_real geared_follower_visc; /* a^2*mu_F */
+    /* The geared solve's law and friction terms, fixed at init where the law
+     * is (loss_static) and the driven side's mass and friction level too (not
+     * regularised, no Stribeck term): the step reads them instead of deriving
+     * them twice per sub-step. */
+    int geared_fixed;
+    gs_real geared_hf;   /* h*|a|*F_C */
+    gs_real geared_l_fd; /* 1 - k_fd */
+    gs_real geared_l_bd; /* 1 + k_bd */
+    gs_real geared_hc;   /* h*|a|*c0 */
     /* A loss law that does not depend on the temperature or the load (none,
      * constant and load-dependent efficiency) is prepared once, at init. */
     int loss_static;
