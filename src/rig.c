@@ -214,6 +214,14 @@ static gs_real contact_h_omega_n(const rig_consts_ *r, gs_real h, gs_real inv_ma
     return init_sqrt(h * h * r->mesh.stiffness * inv_mass);
 }
 
+/* The two power-flow pieces' masses lambda*M_f + M_b of one base rule, with
+ * the law prepared at init (gs_rig_geared_solve's expressions: the same bits). */
+static void geared_masses(const rig_consts_ *r, geared_base_ *base)
+{
+    base->den_fd = r->geared_l_fd * r->geared_follower_mass + base->mass;
+    base->den_bd = r->geared_l_bd * r->geared_follower_mass + base->mass;
+}
+
 /* The compliant shaft: k over J_eff = J_B + a^2*J_F (base gear and driven
  * side geared rigidly), sub-stepped so that h*omega_c <= 0.2, where the
  * midpoint rule's frequency is within 0.4 % (physics.md 11), up to
@@ -256,11 +264,8 @@ static void compliance_fill(rig_consts_ *r, const gs_rig_params *p)
     r->geared_l_fd = GS_R(1.0) - r->loss_law.k_fd;
     r->geared_l_bd = GS_R(1.0) + r->loss_law.k_bd;
     r->geared_hc = h * gs_abs(a) * r->loss_law.c0;
-    geared_base_ *bases[2] = {&r->geared_base, &r->geared_base_end};
-    for (int i = 0; i < 2; ++i) {
-        bases[i]->den_fd = r->geared_l_fd * r->geared_follower_mass + bases[i]->mass;
-        bases[i]->den_bd = r->geared_l_bd * r->geared_follower_mass + bases[i]->mass;
-    }
+    geared_masses(r, &r->geared_base);
+    geared_masses(r, &r->geared_base_end);
 }
 
 /* a = A*cos(phi), b = A*sin(phi) of each harmonic. */

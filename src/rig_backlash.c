@@ -236,6 +236,7 @@ void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
     /* the 2-D table reads its efficiency at the last sub-step's base load */
     const int law_per_substep = m->friction == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY;
     gs_mesh_friction_ table_law; /* its law after the first sub-step */
+    const gs_mesh_friction_ *law_sub = law;
     const gs_real w_b_start = st->base_speed;
     const gs_real w_f_start = st->follower_speed;
     const gs_real push_h = h * (in->load + r->load_offset);
@@ -271,10 +272,10 @@ void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
         } else {
             if (law_per_substep && k > 0) {
                 gs_mesh_friction_law(m, ctx, t_f, &table_law);
-                law = &table_law;
+                law_sub = &table_law;
             }
             gs_mesh_friction_ law_now;
-            const gs_mesh_friction_ *law_k = gs_rig_step_law(r, law, t_f, w_f, &law_now);
+            const gs_mesh_friction_ *law_k = gs_rig_step_law(r, law_sub, t_f, w_f, &law_now);
             e = substep_friction(r, law_k, &c, w_f, w_b_free, momentum, &tau_mesh, &t_f);
         }
         /* x moves with the relative speed the contact was solved for: the end

@@ -35,6 +35,7 @@ void gs_rig_compliant_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss
     const gs_real ramp = (in->base_speed - w_d_start) * r->inv_compliance_substeps;
     const int n = r->compliance_substeps;
     gs_mesh_friction_ table_law; /* the 2-D table's law after the first sub-step */
+    const gs_mesh_friction_ *law_sub = law;
     /* the state in locals over the sub-steps, written back once */
     gs_real w = st->base_speed, w_f = w_f_start, phi = st->shaft_twist, t_f = st->block.follower_torque;
     gs_real theta_b = st->base_angle, x_f = st->follower_position;
@@ -43,7 +44,7 @@ void gs_rig_compliant_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss
     for (int k = 0; k < n; ++k) {
         if (law_per_substep && k > 0) {
             gs_mesh_friction_law(m, ctx, t_f, &table_law);
-            law = &table_law;
+            law_sub = &table_law;
         }
         /* the ramped drive speed at the sub-step's middle: its mean over the sub-step */
         const gs_real w_d = w_d_start + ramp * ((gs_real)k + GS_R(0.5));
@@ -55,7 +56,7 @@ void gs_rig_compliant_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss
         }
         const gs_real spring = r->stiffness * phi - ripple;
         gs_mesh_friction_ law_now;
-        const gs_mesh_friction_ *law_k = gs_rig_step_law(r, law, t_f, a * w, &law_now);
+        const gs_mesh_friction_ *law_k = gs_rig_step_law(r, law_sub, t_f, a * w, &law_now);
         /* The midpoint rule first. The dissipative torque on the base gear
          * (base-referred) opposes w', and so the mean speed too, unless the
          * gear stops or turns within the sub-step; where it would not, the
