@@ -157,6 +157,13 @@ typedef struct {
     int lossy;    /* 0: no meshing loss */
 } gs_mesh_friction_;
 
+/* q_fd and q_bd from k_fd and k_bd (see the fields). */
+static inline void gs_mesh_friction_bounds(gs_mesh_friction_ *law)
+{
+    law->q_fd = law->k_fd < GS_R(1.0) ? law->k_fd / (GS_R(1.0) - law->k_fd) : GS_R(-1.0);
+    law->q_bd = law->k_bd / (GS_R(1.0) + law->k_bd);
+}
+
 /* The law's coefficients for the step. The 2-D table reads its efficiency
  * at the base load |load_estimate|/g (a recent T_F). */
 void gs_mesh_friction_law(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real load_estimate, gs_mesh_friction_ *law);

@@ -156,8 +156,7 @@ void gs_mesh_friction_law(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real lo
         const gs_real k = m->load_slope;
         law->c0 = m->coulomb_idle;
         law->k_fd = law->k_bd = k;
-        law->q_fd = k < GS_R(1.0) ? k / (GS_R(1.0) - k) : GS_R(-1.0);
-        law->q_bd = k / (GS_R(1.0) + k);
+        gs_mesh_friction_bounds(law);
         return;
     }
     case GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY: {

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "rig_internal.h"
+#include "rig_geared.h"
 #include "blocks.h"
 #include "gs_math.h"
 #include "validate.h"
@@ -214,12 +215,12 @@ static gs_real contact_h_omega_n(const rig_consts_ *r, gs_real h, gs_real inv_ma
     return init_sqrt(h * h * r->mesh.stiffness * inv_mass);
 }
 
-/* The two power-flow pieces' masses lambda*M_f + M_b of one base rule, with
- * the law prepared at init (gs_rig_geared_solve's expressions: the same bits). */
+/* The two power-flow pieces' masses of one base rule, with the law prepared
+ * at init. */
 static void geared_masses(const rig_consts_ *r, geared_base_ *base)
 {
-    base->den_fd = r->geared_l_fd * r->geared_follower_mass + base->mass;
-    base->den_bd = r->geared_l_bd * r->geared_follower_mass + base->mass;
+    base->den_fd = gs_rig_geared_piece_mass(r->geared_law.l_fd, r->geared_follower_mass, base);
+    base->den_bd = gs_rig_geared_piece_mass(r->geared_law.l_bd, r->geared_follower_mass, base);
 }
 
 /* The compliant shaft: k over J_eff = J_B + a^2*J_F (base gear and driven
@@ -258,12 +259,8 @@ static void compliance_fill(rig_consts_ *r, const gs_rig_params *p)
     r->geared_base_end.mass = r->base_inertia + h * r->geared_base_end.visc;
     r->geared_follower_visc = a * a * r->mesh.mu_follower;
     r->geared_follower_mass = a * a * r->driven_inertia + h * r->geared_follower_visc;
-    /* the same expressions as gs_rig_geared_solve's, so the same bits */
     r->geared_fixed = r->loss_static && !r->friction_regularised && !r->stribeck;
-    r->geared_hf = h * gs_abs(a) * r->load_coulomb;
-    r->geared_l_fd = GS_R(1.0) - r->loss_law.k_fd;
-    r->geared_l_bd = GS_R(1.0) + r->loss_law.k_bd;
-    r->geared_hc = h * gs_abs(a) * r->loss_law.c0;
+    r->geared_law = gs_rig_geared_law(&r->loss_law, h * gs_abs(a), r->load_coulomb);
     geared_masses(r, &r->geared_base);
     geared_masses(r, &r->geared_base_end);
 }

@@ -17,6 +17,25 @@ typedef struct {
     gs_real coulomb;  /* the load's Coulomb torque that acted (against the follower's motion) */
 } geared_end;
 
+/* The law's and the friction bound's terms over a (sub-)step, h_a = h*|a|:
+ * one expression for the solve and for init, which fixes them where they
+ * are fixed (geared_fixed), so both give the same bits. */
+static inline geared_law_ gs_rig_geared_law(const gs_mesh_friction_ *law, gs_real h_a, gs_real bound)
+{
+    geared_law_ g;
+    g.l_fd = GS_R(1.0) - law->k_fd;
+    g.l_bd = GS_R(1.0) + law->k_bd;
+    g.hc = h_a * law->c0;
+    g.hf = h_a * bound;
+    return g;
+}
+
+/* A power-flow piece's mass lambda*M_f + M_b (lambda: l_fd or l_bd). */
+static inline gs_real gs_rig_geared_piece_mass(gs_real lambda, gs_real follower_mass, const geared_base_ *base)
+{
+    return lambda * follower_mass + base->mass;
+}
+
 /* A base gear geared rigidly to the driven side, over a (sub-)step h from
  * base speed w, by backward Euler, with the meshing loss and the load's
  * Coulomb friction set-valued (physics.md 11, "Lossy meshes hold").
@@ -54,15 +73,13 @@ static inline geared_end gs_rig_geared_solve(const rig_consts_ *r, const gs_mesh
      * each piece is n + sigma-terms = (lambda*M_f + M_b)*dw with
      * n = lambda*(h*a*push - h*a^2*mu_F*w) + h*drive - h*(mu_B + slope)*w,
      * hf = h*|a|*bound and hc = h*|a|*c0. */
-    gs_real level, bound, hf, l_fd, l_bd, hc, den_fd, den_bd;
+    gs_real level, bound, den_fd, den_bd;
+    geared_law_ g;
     gs_real follower_visc = r->geared_follower_visc;
     gs_real creep = GS_R(0.0);
     if (r->geared_fixed) { /* law is r->loss_law, h the solve's at init */
         level = bound = r->load_coulomb;
-        hf = r->geared_hf;
-        l_fd = r->geared_l_fd;
-        l_bd = r->geared_l_bd;
-        hc = r->geared_hc;
+        g = r->geared_law;
         den_fd = base->den_fd;
         den_bd = base->den_bd;
     } else {
@@ -78,13 +95,11 @@ static inline geared_end gs_rig_geared_solve(const rig_consts_ *r, const gs_mesh
             follower_mass += h * a * a * creep;
             bound = GS_R(0.0);
         }
-        hf = h * a_abs * bound;
-        l_fd = GS_R(1.0) - law->k_fd;
-        l_bd = GS_R(1.0) + law->k_bd;
-        hc = h * a_abs * law->c0;
-        den_fd = l_fd * follower_mass + base->mass;
-        den_bd = l_bd * follower_mass + base->mass;
+        g = gs_rig_geared_law(law, h * a_abs, bound);
+        den_fd = gs_rig_geared_piece_mass(g.l_fd, follower_mass, base);
+        den_bd = gs_rig_geared_piece_mass(g.l_bd, follower_mass, base);
     }
+    const gs_real l_fd = g.l_fd, l_bd = g.l_bd, hc = g.hc, hf = g.hf;
     const gs_real follower = h * (a * push - follower_visc * w);
     const gs_real own = h * (drive - base->visc * w);
     gs_real w_end = GS_R(0.0);

@@ -46,6 +46,15 @@ typedef struct {
     gs_real den_bd; /* (1 + k_bd)*M_f + mass */
 } geared_base_;
 
+/* The geared solve's terms from the meshing law and the driven side's
+ * friction bound (gs_rig_geared_law, rig_geared.h). */
+typedef struct {
+    gs_real l_fd; /* 1 - k_fd */
+    gs_real l_bd; /* 1 + k_bd */
+    gs_real hc;   /* h*|a|*c0 */
+    gs_real hf;   /* h*|a|*bound */
+} geared_law_;
+
 /* What init derives for a rig; the public gs_rig_consts is an opaque view of
  * it. The step reads it and writes the public gs_rig_state. */
 typedef struct {
@@ -79,10 +88,7 @@ typedef struct {
      * regularised, no Stribeck term): the step reads them instead of deriving
      * them twice per sub-step. */
     int geared_fixed;
-    gs_real geared_hf;   /* h*|a|*F_C */
-    gs_real geared_l_fd; /* 1 - k_fd */
-    gs_real geared_l_bd; /* 1 + k_bd */
-    gs_real geared_hc;   /* h*|a|*c0 */
+    geared_law_ geared_law; /* of the prepared law and F_C (rig_geared.h) */
     /* A loss law that does not depend on the temperature or the load (none,
      * constant and load-dependent efficiency) is prepared once, at init. */
     int loss_static;

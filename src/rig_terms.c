@@ -38,8 +38,7 @@ gs_mesh_friction_ gs_rig_regularised_law(const rig_consts_ *r, const gs_mesh_fri
     out.c0 *= strength;
     out.k_fd *= strength;
     out.k_bd *= strength;
-    out.q_fd = out.k_fd < GS_R(1.0) ? out.k_fd / (GS_R(1.0) - out.k_fd) : GS_R(-1.0);
-    out.q_bd = out.k_bd / (GS_R(1.0) + out.k_bd);
+    gs_mesh_friction_bounds(&out);
     return out;
 }
 
