@@ -55,6 +55,11 @@ from typing import Any
 
 import numpy as np
 
+#: The automatic contact sub-step count's target, gearsim.AUTO_H_OMEGA_N_MAX
+#: (GS_AUTO_H_OMEGA_N_MAX); this module does not import gearsim, and
+#: tests/python/test_bench_alternatives.py checks that both pick the same count.
+AUTO_H_OMEGA_N_MAX = 0.5
+
 #: Shared parameters of the comparison (SI units). Simple Gear: teeth ratio
 #: g = 2, opposite rotation (s = -1), constant efficiency with the passive law,
 #: default power threshold, viscous [mu_B, mu_F]; rig: follower inertia, dt.
@@ -98,7 +103,7 @@ FULL_PARAMS: dict[str, Any] = {
     "transition_region": 1e-4,  # d, m
     "stiffness": 1e6,  # K, N/m
     "damping": 1e3,  # D, N*s/m
-    "contact_substeps": 0,  # 0: the rig's automatic count (h*omega_n <= 0.5)
+    "contact_substeps": 0,  # 0: the rig's automatic count (h*omega_n <= AUTO_H_OMEGA_N_MAX)
     # thermal mass (eq. 5.1) with a heat path to ambient
     "thermal_mass": 50.0,  # C, J/K
     "initial_temperature": 295.0,  # K
@@ -338,8 +343,8 @@ def python_loop_full(
 
     Speed-driven base, follower inertia J_F, and between them the gear with
     backlash. Each step of dt is cut into n sub-steps of h = dt/n (n: the
-    smallest count with h*omega_n <= 0.5, at most 16, as gearsim documents
-    its automatic choice). In each sub-step:
+    smallest count with h*omega_n <= AUTO_H_OMEGA_N_MAX, at most 16, as
+    gearsim documents its automatic choice). In each sub-step:
 
     1. explicit: the meshing loss of eq. 2.7 from the last contact force by
        the rule of physics.md 4.6, as the friction element of section 11
@@ -397,13 +402,13 @@ def python_loop_full(
     a_th = dt / p["thermal_mass"]  # K/J
     g_th = 1.0 / p["thermal_resistance"]  # W/K
     t_amb = p["ambient_temperature"]  # K
-    # sub-steps: the smallest n with (h*omega_n)^2 <= 0.25, at most 16, where
-    # omega_n^2 = K*r_F^2/(J_F + dt*mu_F) (the C rig's automatic count)
+    # sub-steps: the smallest n with h*omega_n <= AUTO_H_OMEGA_N_MAX, at most
+    # 16, where omega_n^2 = K*r_F^2/(J_F + dt*mu_F) (the C rig's automatic count)
     n = int(p["contact_substeps"])
     if n <= 0:
         k_over_m = k_c * (r_f * r_f / (j_f + dt * mu_f))
         n = 1
-        while n < 16 and not ((dt / n) * (dt / n) * k_over_m <= 0.25):
+        while n < 16 and not ((dt / n) * (dt / n) * k_over_m <= AUTO_H_OMEGA_N_MAX**2):
             n += 1
     h = dt / n  # s
     jh_f = j_f + h * mu_f  # follower inertia with the implicit viscous term

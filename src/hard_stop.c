@@ -91,3 +91,19 @@ void gs_contact_prepare(const gs_mesh_ *m, gs_real h, gs_real inv_mass, gs_conta
     cs->transition = m->inv_transition > GS_R(0.0) ? GS_R(1.0) / m->inv_transition : GS_R(0.0);
     cs->law_force_conditioned = cs->kappa < GS_R(1.0);
 }
+
+void gs_contact_scale(const gs_contact_step_ *cs, gs_real lambda, gs_contact_step_ *scaled)
+{
+    const gs_real inv_lambda = GS_R(1.0) / lambda;
+    *scaled = *cs;
+    scaled->c = cs->c * lambda;
+    scaled->inv_c = cs->inv_c * inv_lambda;
+    scaled->c_stiffness = cs->c_stiffness * lambda;
+    scaled->c_damping = cs->c_damping * lambda;
+    scaled->kappa = cs->kappa * lambda;
+    scaled->kappa_spring = cs->kappa_spring * lambda;
+    scaled->inv_kappa = cs->inv_kappa * inv_lambda;
+    scaled->inv_affine_damped = GS_R(1.0) / (GS_R(1.0) + scaled->kappa);
+    scaled->inv_affine_undamped = GS_R(1.0) / (GS_R(1.0) + scaled->kappa_spring);
+    scaled->law_force_conditioned = scaled->kappa < GS_R(1.0);
+}

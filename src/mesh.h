@@ -188,6 +188,9 @@ gs_real gs_contact_energy(const gs_mesh_ *m, gs_real x);
 /* The constants of gs_contact_solve for sub-step h (s) and the inverse
  * effective mass inv_mass (1/kg) at the pitch line. */
 void gs_contact_prepare(const gs_mesh_ *m, gs_real h, gs_real inv_mass, gs_contact_step_ *cs);
+/* The same constants with h/m_eff multiplied by lambda > 0 (the inverse mass
+ * the contact sees scaled; rig_backlash.c). */
+void gs_contact_scale(const gs_contact_step_ *cs, gs_real lambda, gs_contact_step_ *scaled);
 /* The backward-Euler contact over one sub-step: src/contact.h. */
 
 /* Thermal mass: explicit heat flow q_W, or an ambient path through

@@ -176,15 +176,15 @@ static gs_real contact_inverse_mass(const rig_consts_ *r, gs_real h)
     return m->follower_radius * m->follower_radius / (r->driven_inertia + h * m->mu_follower) + base_inverse_mass(r, h);
 }
 
-/* Smallest count with (h*omega_n)^2 <= 0.25, i.e. h*omega_n <= 0.5, capped:
- * backward Euler is stable at any count; this only buys accuracy. */
+/* Smallest count with h*omega_n <= GS_AUTO_H_OMEGA_N_MAX, capped: backward
+ * Euler is stable and passive at any count; this only buys accuracy. */
 static int automatic_substeps(const rig_consts_ *r)
 {
     const gs_real k_over_m = r->mesh.stiffness * contact_inverse_mass(r, r->dt);
     int n = 1;
     while (n < GS_AUTO_SUBSTEPS_MAX) {
         const gs_real h = r->dt / (gs_real)n;
-        if (h * h * k_over_m <= GS_R(0.25)) {
+        if (h * h * k_over_m <= (gs_real)GS_AUTO_H_OMEGA_N_MAX * (gs_real)GS_AUTO_H_OMEGA_N_MAX) {
             break;
         }
         ++n;
@@ -322,6 +322,7 @@ static void rig_fill(rig_consts_ *r, const gs_rig_params *p)
     r->follower_lever = r->mesh.direction * r->mesh.follower_radius;
     r->follower_kick = r->substep * r->follower_lever * r->inv_driven_inertia_sub;
     r->base_kick = r->substep * r->mesh.base_radius * r->inv_base_inertia_sub;
+    r->bound_gain = GS_R(0.0);
     memset(&r->contact, 0, sizeof r->contact);
     memset(&r->contact_stuck, 0, sizeof r->contact_stuck);
     if (r->mesh.backlash) {
@@ -330,17 +331,20 @@ static void rig_fill(rig_consts_ *r, const gs_rig_params *p)
         if (r->base_drive == GS_BASE_TORQUE_DRIVEN) {
             gs_contact_prepare(&r->mesh, r->substep, base_inverse_mass(r, r->substep), &r->contact_stuck);
         }
+        r->bound_gain = r->contact.inv_c * r->follower_lever * r->follower_kick;
         r->contact_h_omega_n = contact_h_omega_n(r, r->substep, inv_eff_mass);
-        r->substeps_capped = p->contact_substeps == 0 && r->contact_h_omega_n > GS_R(0.5);
+        r->substeps_capped = p->contact_substeps == 0 && r->contact_h_omega_n > (gs_real)GS_AUTO_H_OMEGA_N_MAX;
     }
     r->loss_static = r->mesh.friction == GS_FRICTION_NONE || r->mesh.friction == GS_FRICTION_CONSTANT_EFFICIENCY ||
                      r->mesh.friction == GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY;
+    r->law_per_substep = r->mesh.friction == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY;
     memset(&r->loss_ctx, 0, sizeof r->loss_ctx);
     gs_mesh_loss_prepare(&r->mesh, r->mesh.initial_temperature, &r->loss_ctx);
     gs_mesh_friction_law(&r->mesh, &r->loss_ctx, GS_R(0.0), &r->loss_law);
     r->stribeck = p->load_breakaway_friction > GS_R(0.0);
     r->stribeck_excess = r->stribeck ? p->load_breakaway_friction - p->load_coulomb_friction : GS_R(0.0);
     r->inv_stribeck_speed_sq = r->stribeck ? GS_R(1.0) / (p->load_stribeck_speed * p->load_stribeck_speed) : GS_R(0.0);
+    r->follower_free = !r->loss_law.lossy && !r->stribeck && !(r->load_coulomb > GS_R(0.0));
     compliance_fill(r, p);
     ripple_fill(r, p);
 }

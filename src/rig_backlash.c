@@ -34,14 +34,6 @@ static inline substep_end contact_moving(const rig_consts_ *r, contact_state *c,
     return e;
 }
 
-/* contact_moving with a friction torque `friction` (N*m or N, on the
- * follower) added to the free motion: sliding against the motion. */
-static inline substep_end contact_sliding(const rig_consts_ *r, contact_state *c, gs_real w_b_free, gs_real momentum,
-                                          gs_real friction)
-{
-    return contact_moving(r, c, w_b_free, (momentum + r->substep * friction) * r->inv_driven_inertia_sub);
-}
-
 /* One sub-step with the follower held at rest by its friction: the contact
  * sees the base alone. A speed-driven base imposes the tooth motion, so the
  * force is the law at the end of the sub-step; a torque-driven base solves
@@ -65,127 +57,219 @@ static inline substep_end contact_stuck(const rig_consts_ *r, contact_state *c, 
 /* How a sub-step's friction on the follower came out. */
 typedef enum { FRICTION_NONE = 0, FRICTION_FORWARD, FRICTION_BACKWARD, FRICTION_STUCK } friction_mode;
 
-/* One sub-step with a friction torque on the follower inside [-fwd, bwd]
- * (backward Euler, set-valued at rest): fwd is what opposes forward motion,
- * bwd backward motion, a negative bound none at all (the mesh self-locks
- * that way). momentum is J_F*w_F + h*(every other torque but the contact).
- * The joint contact-and-friction solution is one of three: sliding on in the
- * current direction, stuck, or sliding the other way; they are tried in that
- * order and the first consistent one is taken, so a sub-step costs one
- * contact solve while sliding on and at most three (five with the
- * static-contact lock, see below). *friction is the friction torque on the
- * follower. */
-static substep_end substep_with_friction(const rig_consts_ *r, contact_state *c, gs_real w_f, gs_real w_b_free,
-                                         gs_real momentum, gs_real fwd, gs_real bwd, gs_real *friction,
+/* The follower's friction in a sub-step: the meshing law (physics.md 4.6)
+ * and the load's friction level. */
+typedef struct {
+    const gs_mesh_friction_ *law;
+    gs_real level; /* the load's Coulomb (or Stribeck, or creep) level, N*m or N */
+} follower_friction;
+
+/* The bound of the follower's friction one way (sigma = +1: against forward
+ * motion, -1: backward), on one branch of the meshing law: the solution of
+ * T_F = T_F0 + tau_mesh(T_F) at full strength, with T_F0 = -s*r_F*f, is
+ * affine in the contact force f on each side of a = c0 - sigma*s*r_F*f = 0:
+ * bound(f) = level + c0*(1 + q) - sigma*q*s*r_F*f, with q = q_fd where the
+ * follower drives (a >= 0) and -q_bd where the base drives. A mesh that
+ * self-locks (q_fd < 0) has no bound that way. */
+typedef struct {
+    gs_real constant; /* level + c0*(1 + q) */
+    gs_real q;
+    int follower_drives; /* the branch a >= 0 */
+    int unbounded;       /* self-locking that way: no bound */
+} friction_bound;
+
+static inline friction_bound bound_branch(const follower_friction *fr, int follower_drives)
+{
+    friction_bound b = {fr->level, GS_R(0.0), follower_drives, 0};
+    if (fr->law->lossy) {
+        if (follower_drives) {
+            b.q = fr->law->q_fd;
+            b.unbounded = b.q < GS_R(0.0);
+        } else {
+            b.q = -fr->law->q_bd;
+        }
+        b.constant = fr->level + fr->law->c0 * (GS_R(1.0) + b.q);
+    }
+    return b;
+}
+
+/* Which branch the law is on at the tooth torque lever_f = s*r_F*f. */
+static inline int follower_drives_at(const follower_friction *fr, gs_real sigma, gs_real lever_f)
+{
+    return fr->law->c0 - sigma * lever_f >= GS_R(0.0);
+}
+
+static inline friction_bound bound_at(const follower_friction *fr, gs_real sigma, gs_real lever_f)
+{
+    return bound_branch(fr, follower_drives_at(fr, sigma, lever_f));
+}
+
+static inline gs_real bound_value(const friction_bound *b, gs_real sigma, gs_real lever_f)
+{
+    return b->constant - sigma * b->q * lever_f;
+}
+
+/* One sub-step sliding the way sigma against the bound b, solved jointly
+ * with the contact: the friction on the follower, -sigma*bound(f), is the law
+ * at the sub-step's own force f. Its part in f, q*s*r_F*f, adds to the
+ * contact's pull on the follower: the contact sees the follower's inverse
+ * mass times (1 + q), its constants scaled by lambda = 1 + bound_gain*q
+ * (h/m_eff times lambda). (Taking the bound at the last sub-step's force, as
+ * until 2026-11, rang where the contact answers rigidly and the follower
+ * drives: the force alternated about the consistent one with a gain of up to
+ * q_fd, and an efficiency of 0.5 or less on locked teeth, 0.15 on the full
+ * laws, settled on wrong torques or never.) */
+static substep_end contact_against(const rig_consts_ *r, contact_state *c, gs_real w_b_free, gs_real momentum,
+                                   gs_real sigma, const friction_bound *b)
+{
+    const gs_real w_f_free = (momentum - r->substep * sigma * b->constant) * r->inv_driven_inertia_sub;
+    const gs_real lambda = GS_R(1.0) + r->bound_gain * b->q;
+    if (!(b->q > GS_R(0.0) || b->q < GS_R(0.0)) || !(lambda > GS_R(0.0))) {
+        return contact_moving(r, c, w_b_free, w_f_free);
+    }
+    gs_contact_step_ cs;
+    gs_contact_scale(&r->contact, lambda, &cs);
+    substep_end e;
+    const gs_real u_free = r->mesh.base_radius * w_b_free - r->follower_lever * w_f_free;
+    e.u = gs_contact_solve(&r->mesh, &cs, c->x, u_free, c->f, &c->locked, &e.f, &e.f_spring);
+    e.w_f = w_f_free + r->follower_kick * (GS_R(1.0) + b->q) * e.f;
+    e.w_b = w_b_free - r->base_kick * e.f;
+    return e;
+}
+
+/* slide() where the first branch was not consistent with its own force: the
+ * other branch, and where that is not either, the kink between them (a = 0,
+ * the bound level + c0), where the force then sits. */
+static substep_end slide_other_branch(const rig_consts_ *r, const follower_friction *fr, contact_state *c,
+                                      gs_real w_b_free, gs_real momentum, gs_real sigma, int first_drives,
+                                      gs_real *friction)
+{
+    const int locked = c->locked;
+    friction_bound b = bound_branch(fr, !first_drives);
+    if (!b.unbounded) {
+        const substep_end e = contact_against(r, c, w_b_free, momentum, sigma, &b);
+        const gs_real lever_f = r->follower_lever * e.f;
+        if (follower_drives_at(fr, sigma, lever_f) == b.follower_drives) {
+            *friction = -sigma * bound_value(&b, sigma, lever_f);
+            return e;
+        }
+        c->locked = locked;
+    }
+    b.constant = fr->level + fr->law->c0;
+    b.q = GS_R(0.0);
+    *friction = -sigma * b.constant;
+    return contact_against(r, c, w_b_free, momentum, sigma, &b);
+}
+
+/* Sliding the way sigma, the law on its branch at the force lever_f_guess
+ * first (slide_other_branch where that is not consistent). *friction is the
+ * friction torque on the follower. Returns 0 (no solve) where the mesh
+ * self-locks that way at the guess. */
+static inline int slide(const rig_consts_ *r, const follower_friction *fr, contact_state *c, gs_real w_b_free,
+                        gs_real momentum, gs_real sigma, gs_real lever_f_guess, substep_end *e, gs_real *friction)
+{
+    if (!fr->law->lossy) { /* the load's friction alone: a constant bound */
+        *friction = -sigma * fr->level;
+        *e = contact_moving(r, c, w_b_free, (momentum + r->substep * *friction) * r->inv_driven_inertia_sub);
+        return 1;
+    }
+    const int locked = c->locked;
+    const friction_bound b = bound_at(fr, sigma, lever_f_guess);
+    if (b.unbounded) {
+        return 0;
+    }
+    *e = contact_against(r, c, w_b_free, momentum, sigma, &b);
+    const gs_real lever_f = r->follower_lever * e->f;
+    if (follower_drives_at(fr, sigma, lever_f) == b.follower_drives) {
+        *friction = -sigma * bound_value(&b, sigma, lever_f);
+        return 1;
+    }
+    c->locked = locked;
+    *e = slide_other_branch(r, fr, c, w_b_free, momentum, sigma, b.follower_drives, friction);
+    return 1;
+}
+
+/* One sub-step with the follower's friction, set-valued at rest, solved
+ * with the contact by backward Euler. momentum is J_F*w_F + h*(every other
+ * torque but the contact and the friction). The joint solution is one of
+ * three: sliding on in the current direction, stuck, or sliding the other
+ * way; they are tried in that order and the first consistent one is taken,
+ * so a sub-step costs one contact solve while sliding on (more where the
+ * law changes branch) and at most three (five with the static-contact lock,
+ * see below). *friction is the friction torque on the follower. */
+static substep_end substep_with_friction(const rig_consts_ *r, const follower_friction *fr, contact_state *c,
+                                         gs_real w_f, gs_real w_b_free, gs_real momentum, gs_real *friction,
                                          friction_mode *mode)
 {
     const int locked = c->locked;
+    const gs_real lever_f_last = r->follower_lever * c->f;
     substep_end e;
-    if (w_f > GS_R(0.0) && !(fwd < GS_R(0.0))) {
-        *friction = -fwd;
+    if (w_f > GS_R(0.0) && slide(r, fr, c, w_b_free, momentum, GS_R(1.0), lever_f_last, &e, friction)) {
         *mode = FRICTION_FORWARD;
-        e = contact_sliding(r, c, w_b_free, momentum, *friction);
         if (!(e.w_f < GS_R(0.0))) { /* at exactly 0 any friction within the bounds is consistent */
             return e;
         }
         c->locked = locked;
-    } else if (w_f < GS_R(0.0) && !(bwd < GS_R(0.0))) {
-        *friction = bwd;
+    } else if (w_f < GS_R(0.0) && slide(r, fr, c, w_b_free, momentum, GS_R(-1.0), lever_f_last, &e, friction)) {
         *mode = FRICTION_BACKWARD;
-        e = contact_sliding(r, c, w_b_free, momentum, *friction);
         if (!(e.w_f > GS_R(0.0))) {
             return e;
         }
         c->locked = locked;
     }
     e = contact_stuck(r, c, w_b_free);
-    /* J_F*(0 - w_F) = h*(others + s*r_F*f + friction) */
-    const gs_real needed = -(momentum * r->contact.inv_h + r->follower_lever * e.f);
-    if ((fwd < GS_R(0.0) || needed >= -fwd) && (bwd < GS_R(0.0) || needed <= bwd)) {
+    /* J_F*(0 - w_F) = h*(others + s*r_F*f + friction), the bounds at this f */
+    const gs_real lever_f = r->follower_lever * e.f;
+    const gs_real needed = -(momentum * r->contact.inv_h + lever_f);
+    const friction_bound fwd = bound_at(fr, GS_R(1.0), lever_f);
+    const friction_bound bwd = bound_at(fr, GS_R(-1.0), lever_f);
+    if ((fwd.unbounded || needed >= -bound_value(&fwd, GS_R(1.0), lever_f)) &&
+        (bwd.unbounded || needed <= bound_value(&bwd, GS_R(-1.0), lever_f))) {
         *friction = needed;
         *mode = FRICTION_STUCK;
         return e;
     }
     c->locked = locked;
-    /* against the way the rest pushes (a finite bound that way: the other
-     * was not exceeded) */
-    if (needed < GS_R(0.0)) {
-        *friction = -fwd;
-        *mode = FRICTION_FORWARD;
-    } else {
-        *friction = bwd;
-        *mode = FRICTION_BACKWARD;
-    }
-    e = contact_sliding(r, c, w_b_free, momentum, *friction);
-    if (*friction * e.w_f <= GS_R(0.0)) {
-        return e;
-    }
-    /* Only with the static-contact lock: the locked follower moves with the
-     * base whatever its friction does, so the friction opposes that motion (a
-     * fourth solve). If that releases the lock and the follower turns back,
-     * or the mesh has no bound that way, the lock's hysteresis leaves no
-     * consistent friction: the sub-step runs without it (a fifth solve),
-     * which never does negative work. */
-    c->locked = locked;
-    if (e.w_f > GS_R(0.0) ? !(fwd < GS_R(0.0)) : !(bwd < GS_R(0.0))) {
-        *friction = e.w_f > GS_R(0.0) ? -fwd : bwd;
-        *mode = e.w_f > GS_R(0.0) ? FRICTION_FORWARD : FRICTION_BACKWARD;
-        e = contact_sliding(r, c, w_b_free, momentum, *friction);
+    /* against the way the rest pushes (a bound that way: the other was not
+     * exceeded) */
+    const gs_real sigma = needed < GS_R(0.0) ? GS_R(1.0) : GS_R(-1.0);
+    if (slide(r, fr, c, w_b_free, momentum, sigma, lever_f, &e, friction)) {
+        *mode = sigma > GS_R(0.0) ? FRICTION_FORWARD : FRICTION_BACKWARD;
         if (*friction * e.w_f <= GS_R(0.0)) {
             return e;
         }
+        /* Only with the static-contact lock: the locked follower moves with
+         * the base whatever its friction does, so the friction opposes that
+         * motion (a fourth solve). If that releases the lock and the
+         * follower turns back, or the mesh has no bound that way, the lock's
+         * hysteresis leaves no consistent friction: the sub-step runs without
+         * it (a fifth solve), which never does negative work. */
         c->locked = locked;
+        const gs_real sigma_locked = e.w_f > GS_R(0.0) ? GS_R(1.0) : GS_R(-1.0);
+        if (slide(r, fr, c, w_b_free, momentum, sigma_locked, r->follower_lever * e.f, &e, friction)) {
+            *mode = sigma_locked > GS_R(0.0) ? FRICTION_FORWARD : FRICTION_BACKWARD;
+            if (*friction * e.w_f <= GS_R(0.0)) {
+                return e;
+            }
+            c->locked = locked;
+        }
     }
     *friction = GS_R(0.0);
     *mode = FRICTION_NONE;
     return contact_moving(r, c, w_b_free, momentum * r->inv_driven_inertia_sub);
 }
 
-/* The meshing loss's bounds on the follower for the loss-free tooth torque
- * t_f0 = -s*r_F*f: the solution of T_F = T_F0 + tau_mesh(T_F) (physics.md
- * 4.6) with the law at full strength, for motion forward (*fwd) and backward
- * (*bwd). With a = sigma*T_F0 + c0: the follower drives (a >= 0) against
- * c0 + q_fd*a, unbounded where the mesh self-locks (q_fd < 0: *bound = -1);
- * the base drives (a < 0) against c0 - q_bd*a. */
-static inline void mesh_bounds(const gs_mesh_friction_ *law, gs_real t_f0, gs_real *fwd, gs_real *bwd)
-{
-    const gs_real a_fwd = law->c0 + t_f0;
-    const gs_real a_bwd = law->c0 - t_f0;
-    if (a_fwd >= GS_R(0.0)) {
-        *fwd = law->q_fd < GS_R(0.0) ? GS_R(-1.0) : law->c0 + law->q_fd * a_fwd;
-    } else {
-        *fwd = law->c0 - law->q_bd * a_fwd;
-    }
-    if (a_bwd >= GS_R(0.0)) {
-        *bwd = law->q_fd < GS_R(0.0) ? GS_R(-1.0) : law->c0 + law->q_fd * a_bwd;
-    } else {
-        *bwd = law->c0 - law->q_bd * a_bwd;
-    }
-}
-
 /* The follower's friction in one sub-step with backlash: the meshing loss
- * on the last contact force (physics.md 4.6), a set-valued friction on the
- * follower added to the load's Coulomb friction; it holds the follower at
- * rest within its bounds and opposes its motion beyond them. Returns the
- * sub-step's end and the meshing loss that acted (*tau_mesh, against the
- * follower's motion), and updates *t_f, the net follower torque T_F of the
- * law on that force the way the follower slides (the base load of the 2-D
- * table: a fixed point in steady contact; T_F0 at rest or where the mesh
- * self-locks). */
+ * (physics.md 4.6), a set-valued friction on the follower added to the
+ * load's Coulomb friction, taken at the sub-step's own contact force; it
+ * holds the follower at rest within its bounds and opposes its motion beyond
+ * them. Returns the sub-step's end and the meshing loss that acted
+ * (*tau_mesh, against the follower's motion), and sets *t_f, the net
+ * follower torque T_F of the law on that force (the base load of the 2-D
+ * table: T_F0 at rest). */
 static substep_end substep_friction(const rig_consts_ *r, const gs_mesh_friction_ *law, contact_state *c, gs_real w_f,
                                     gs_real w_b_free, gs_real momentum, gs_real *tau_mesh, gs_real *t_f)
 {
-    gs_real mesh_fwd = GS_R(0.0), mesh_bwd = GS_R(0.0);
-    const gs_real t_f0 = -r->follower_lever * c->f;
-    *t_f = t_f0;
-    if (law->lossy) {
-        mesh_bounds(law, t_f0, &mesh_fwd, &mesh_bwd);
-        if (w_f > GS_R(0.0) && !(mesh_fwd < GS_R(0.0))) {
-            *t_f = t_f0 + mesh_fwd;
-        } else if (w_f < GS_R(0.0) && !(mesh_bwd < GS_R(0.0))) {
-            *t_f = t_f0 - mesh_bwd;
-        }
-    }
     /* Regularised, the load's friction bound is the smooth law at the
      * sub-step's start speed, F(v)*|tanh(4 v/v_th)|: zero at rest, so the
      * driven side creeps instead of sticking, and, solved jointly with the
@@ -193,29 +277,31 @@ static substep_end substep_friction(const rig_consts_ *r, const gs_mesh_friction
      * damper applied before the contact, then the contact, created energy
      * where the contact turned the follower within the sub-step: fuzz
      * finding.) */
-    const gs_real level = r->friction_regularised ? gs_rig_creep_level(r, w_f) : friction_level(r, w_f);
-    const gs_real fwd = mesh_fwd < GS_R(0.0) ? mesh_fwd : mesh_fwd + level;
-    const gs_real bwd = mesh_bwd < GS_R(0.0) ? mesh_bwd : mesh_bwd + level;
+    const follower_friction fr = {law, r->friction_regularised ? gs_rig_creep_level(r, w_f) : friction_level(r, w_f)};
     gs_real friction = GS_R(0.0);
     friction_mode mode = FRICTION_NONE;
     substep_end e;
-    if (fwd > GS_R(0.0) || fwd < GS_R(0.0) || bwd > GS_R(0.0) || bwd < GS_R(0.0)) {
-        e = substep_with_friction(r, c, w_f, w_b_free, momentum, fwd, bwd, &friction, &mode);
+    if (law->lossy || fr.level > GS_R(0.0) || fr.level < GS_R(0.0)) {
+        e = substep_with_friction(r, &fr, c, w_f, w_b_free, momentum, &friction, &mode);
     } else {
         e = contact_moving(r, c, w_b_free, momentum * r->inv_driven_inertia_sub);
     }
     /* the meshing loss's share of the friction (it acts on the follower as
-     * -tau_mesh): all of it beyond the Coulomb level; at rest the Coulomb
+     * -tau_mesh): all of it beyond the load's level; at rest the load's
      * friction holds what it can and the mesh the rest */
+    const gs_real t_f0 = -r->follower_lever * e.f;
+    *t_f = t_f0;
     switch (mode) {
     case FRICTION_FORWARD:
-        *tau_mesh = mesh_fwd;
+        *tau_mesh = -friction - fr.level;
+        *t_f = t_f0 + *tau_mesh;
         break;
     case FRICTION_BACKWARD:
-        *tau_mesh = -mesh_bwd;
+        *tau_mesh = -friction + fr.level;
+        *t_f = t_f0 + *tau_mesh;
         break;
     case FRICTION_STUCK:
-        *tau_mesh = gs_clamp(friction, -level, level) - friction;
+        *tau_mesh = gs_clamp(friction, -fr.level, fr.level) - friction;
         break;
     case FRICTION_NONE:
         *tau_mesh = GS_R(0.0);
@@ -231,10 +317,8 @@ void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
     const int n = r->substeps;
     const gs_real h = r->substep;
     const int speed_driven = r->base_drive == GS_BASE_SPEED_DRIVEN;
-    /* no friction on the follower at all: every sub-step is one contact solve */
-    const int free_follower = !law->lossy && !r->stribeck && !(r->load_coulomb > GS_R(0.0));
-    /* the 2-D table reads its efficiency at the last sub-step's base load */
-    const int law_per_substep = m->friction == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY;
+    const int free_follower = r->follower_free;
+    const int law_per_substep = r->law_per_substep;
     gs_mesh_friction_ table_law; /* its law after the first sub-step */
     const gs_mesh_friction_ *law_sub = law;
     const gs_real w_b_start = st->base_speed;

@@ -92,6 +92,11 @@ typedef struct {
     /* A loss law that does not depend on the temperature or the load (none,
      * constant and load-dependent efficiency) is prepared once, at init. */
     int loss_static;
+    /* backlash: no friction on the follower at all (every sub-step is one
+     * contact solve), and a law read again in every sub-step (the 2-D
+     * table, at the last sub-step's base load) */
+    int follower_free;
+    int law_per_substep;
     gs_loss_ctx_ loss_ctx;
     gs_mesh_friction_ loss_law;
     gs_real substep;                /* h = dt/substeps, s */
@@ -101,6 +106,8 @@ typedef struct {
     gs_real follower_lever;         /* s*r_F (m; the rack: s_R): T_F0 = -s*r_F*f */
     gs_real follower_kick;          /* h*s*r_F/(J_F + h*mu_F): the follower's speed per contact force */
     gs_real base_kick;              /* h*r_B/(J_B + h*mu_B): the base's (0 speed-driven) */
+    gs_real bound_gain;             /* s*r_F*follower_kick/(h/m_eff): the follower's share of the
+                                     * contact's inverse mass (rig_backlash.c) */
     gs_real contact_h_omega_n;      /* h*omega_n of the contact at the chosen sub-step */
     gs_contact_step_ contact;       /* backward-Euler contact constants for h */
     gs_contact_step_ contact_stuck; /* the same with the driven side held by its friction

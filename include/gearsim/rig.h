@@ -53,8 +53,11 @@ extern "C" {
 #define gs_rig_init_rack GS_PRECISION_NAME(gs_rig_init_rack)
 
 #define GS_MAX_SUBSTEPS      64
-/* The automatic sub-step count (contact_substeps = 0) stops here; see gs_rig_info. */
-#define GS_AUTO_SUBSTEPS_MAX 16
+/* The automatic sub-step count (contact_substeps = 0) is the smallest with
+ * h*omega_n <= GS_AUTO_H_OMEGA_N_MAX, and stops at GS_AUTO_SUBSTEPS_MAX; see
+ * gs_rig_info. */
+#define GS_AUTO_H_OMEGA_N_MAX 0.5
+#define GS_AUTO_SUBSTEPS_MAX  16
 /* Harmonics of the torque ripple, per revolution and per tooth mesh. */
 #define GS_RIPPLE_HARMONICS  2
 
@@ -120,9 +123,9 @@ GS_API extern const gs_field_info gs_rig_state_info[GS_RIG_STATE_FIELDS];
  * stale count, and the compiler's message gives the value to write here
  * (src/mesh.h, GS_CONSTS_REALS_CHECK_). */
 #ifdef GS_SINGLE_PRECISION
-#define GS_RIG_CONSTS_REALS 260
+#define GS_RIG_CONSTS_REALS 263
 #else
-#define GS_RIG_CONSTS_REALS 251
+#define GS_RIG_CONSTS_REALS 253
 #endif
 typedef struct {
     gs_real opaque_[GS_RIG_CONSTS_REALS];

@@ -475,6 +475,25 @@ static void set_shaft(gs_rig_params *rp, int on)
     rp->compliance_damping_Nm_s_rad = R(on ? 5.0 : 0.0);
 }
 
+/* The backlash options the matrix leaves at their defaults, varied by
+ * test_settled_low_efficiency: a variant outside the tables, the hard stop,
+ * the static-contact lock and the sub-step count (0: automatic). */
+typedef struct {
+    const gear_variant *gear;
+    const rack_variant *rack;
+    int hard_stop; /* index into hard_stops */
+    int lock;
+    int substeps;
+} backlash_options;
+
+static void apply_backlash_options(gs_backlash_params *bl, gs_rig_params *rp, const backlash_options *bo)
+{
+    if (bo == NULL) return;
+    bl->hard_stop_model = hard_stops[bo->hard_stop];
+    bl->lock_enabled = bo->lock;
+    rp->contact_substeps = bo->substeps;
+}
+
 /* Design inputs from the design point (omega_F*, T_F*): the speed-driven rig
  * gets omega_B = rho*omega_F*, the torque-driven rig the motor torque that
  * holds that point. The expectations are then re-derived forward from the
@@ -523,10 +542,10 @@ static void run_case(matrix_stats *st, const case_label *cl, const hand_model *h
 /* One case of the simple gear matrix: variant iv, backlash ib, drive id (1: torque),
  * direction ir, power flow ifl (1: the follower drives); shaft: a compliant
  * base shaft (speed-driven, no backlash). */
-static void gear_case(matrix_stats *st, int iv, int ib, int id, int ir, int ifl, int shaft)
+static void gear_case(matrix_stats *st, int iv, int ib, int id, int ir, int ifl, int shaft, const backlash_options *bo)
 {
     const gs_output_rotation rots[2] = {GS_ROTATES_SAME, GS_ROTATES_OPPOSITE};
-    const gear_variant *v = &gear_variants[iv];
+    const gear_variant *v = bo != NULL && bo->gear != NULL ? bo->gear : &gear_variants[iv];
     gs_simple_gear_params gp = gs_simple_gear_params_default();
     gs_rig_params rp = gs_rig_params_default();
     test_rig rig;
@@ -590,6 +609,7 @@ static void gear_case(matrix_stats *st, int iv, int ib, int id, int ir, int ifl,
     rp.load_offset = R(G_OFFSET);
     rp.temperature_source = GS_TEMPERATURE_FROM_INPUT;
     set_shaft(&rp, shaft);
+    apply_backlash_options(&gp.backlash, &rp, bo);
 
     h = gear_hand(&gp, &rp);
     if (v->model == GS_FRICTION_TEMPERATURE_DEPENDENT_EFFICIENCY)
@@ -627,15 +647,15 @@ static void gear_cases(matrix_stats *st)
     int iv, c;
     for (iv = 0; iv < N_GEAR_VARIANTS; ++iv)
         for (c = 0; c < 16; ++c) /* ib, id, ir, ifl: bits 3 to 0 */
-            gear_case(st, iv, (c >> 3) & 1, (c >> 2) & 1, (c >> 1) & 1, c & 1, 0);
+            gear_case(st, iv, (c >> 3) & 1, (c >> 2) & 1, (c >> 1) & 1, c & 1, 0, NULL);
 }
 
 /* One case of the rack & pinion matrix: variant iv, backlash ib, drive id (1: torque),
  * direction ir, power flow ifl (1: the follower drives); shaft as for the gear. */
-static void rack_case(matrix_stats *st, int iv, int ib, int id, int ir, int ifl, int shaft)
+static void rack_case(matrix_stats *st, int iv, int ib, int id, int ir, int ifl, int shaft, const backlash_options *bo)
 {
     const gs_rack_direction dirs[2] = {GS_RACK_POSITIVE, GS_RACK_NEGATIVE};
-    const rack_variant *v = &rack_variants[iv];
+    const rack_variant *v = bo != NULL && bo->rack != NULL ? bo->rack : &rack_variants[iv];
     gs_rack_pinion_params pp = gs_rack_pinion_params_default();
     gs_rig_params rp = gs_rig_params_default();
     test_rig rig;
@@ -666,6 +686,7 @@ static void rack_case(matrix_stats *st, int iv, int ib, int id, int ir, int ifl,
     rp.load_offset = R(R_OFFSET);
     rp.temperature_source = GS_TEMPERATURE_FROM_INPUT;
     set_shaft(&rp, shaft);
+    apply_backlash_options(&pp.backlash, &rp, bo);
 
     /* r_P: the parameter, or N*x/(2*pi) (6.2) */
     r_P = tooth ? (double)pp.teeth_count * (double)pp.spacing_m / (2.0 * TEST_PI) : (double)pp.pinion_radius_m;
@@ -700,7 +721,7 @@ static void rack_cases(matrix_stats *st)
     int iv, c;
     for (iv = 0; iv < N_RACK_VARIANTS; ++iv)
         for (c = 0; c < 16; ++c) /* ib, id, ir, ifl: bits 3 to 0 */
-            rack_case(st, iv, (c >> 3) & 1, (c >> 2) & 1, (c >> 1) & 1, c & 1, 0);
+            rack_case(st, iv, (c >> 3) & 1, (c >> 2) & 1, (c >> 1) & 1, c & 1, 0, NULL);
 }
 
 static void test_settled_matrix(void **state)
@@ -729,12 +750,48 @@ static void test_settled_compliant_shaft(void **state)
     memset(&st, 0, sizeof st);
     for (iv = 0; iv < N_GEAR_VARIANTS; ++iv)
         for (c = 0; c < 4; ++c) /* ir, ifl: bits 1 and 0 */
-            gear_case(&st, iv, 0, 0, (c >> 1) & 1, c & 1, 1);
+            gear_case(&st, iv, 0, 0, (c >> 1) & 1, c & 1, 1, NULL);
     for (iv = 0; iv < N_RACK_VARIANTS; ++iv)
         for (c = 0; c < 4; ++c)
-            rack_case(&st, iv, 0, 0, (c >> 1) & 1, c & 1, 1);
+            rack_case(&st, iv, 0, 0, (c >> 1) & 1, c & 1, 1, NULL);
     printf("settled with a compliant shaft: %d cases%s\n", st.cases, st.failures ? "" : ", all settled as derived");
     if (st.failures) fail_msg("compliant shaft: %d of %d cases differ from the hand values", st.failures, st.cases);
+}
+
+/* Low efficiencies with backlash, where the follower's meshing loss is
+ * several times the tooth torque it passes on (q_fd = 1/eta - 1 up to 19):
+ * constant efficiency 0.5, 0.3, 0.15 and 0.05 on both blocks, every hard stop,
+ * the static-contact lock off and on, 1, 2 and 3 sub-steps, both drives and
+ * both power flows. The hand values are the matrix's (the rigid law, 4.6
+ * correction). Until 2026-11-27 the loss's bounds lagged the contact force by
+ * a sub-step, and where the follower drives on locked teeth (eta <= 0.5) or a
+ * full law (eta <= 0.15) the force rang about the settled one: an odd
+ * sub-step count reported a base torque off by up to 50 %, lower
+ * efficiencies never settled. */
+static void test_settled_low_efficiency(void **state)
+{
+    static const double etas[4] = {0.5, 0.3, 0.15, 0.05};
+    static const char *const names[4] = {"const(0.5)", "const(0.3)", "const(0.15)", "const(0.05)"};
+    matrix_stats st;
+    int ie, ihs, lock, n, c;
+    (void)state;
+    memset(&st, 0, sizeof st);
+    for (ie = 0; ie < 4; ++ie) {
+        const gear_variant gv = {names[ie], GS_FRICTION_CONSTANT_EFFICIENCY, GS_SMOOTHING_PASSIVE, 2.5, etas[ie], 0};
+        const rack_variant rv = {names[ie], GS_FRICTION_CONSTANT_EFFICIENCY, etas[ie]};
+        for (ihs = 0; ihs < 3; ++ihs)
+            for (lock = 0; lock < 2; ++lock)
+                for (n = 1; n <= 3; ++n)
+                    for (c = 0; c < 4; ++c) { /* id, ifl: bits 1 and 0 */
+                        const backlash_options bo = {&gv, &rv, ihs, lock, n};
+                        gear_case(&st, 2, 1, (c >> 1) & 1, (ie + n) & 1, c & 1, 0, &bo);
+                        rack_case(&st, 1, 1, (c >> 1) & 1, (ie + n) & 1, c & 1, 0, &bo);
+                    }
+    }
+    printf("settled with low efficiencies and backlash: %d cases (4 efficiencies x 3 hard stops x lock off/on x "
+           "1-3 sub-steps x 2 drives x 2 power flows x 2 blocks)%s\n",
+           st.cases, st.failures ? "" : ", all settled as derived");
+    if (st.failures) fail_msg("low efficiencies: %d of %d cases differ from the hand values", st.failures, st.cases);
 }
 
 /* ======================================================================== */
@@ -1022,6 +1079,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_settled_matrix), cmocka_unit_test(test_settled_compliant_shaft),
+        cmocka_unit_test(test_settled_low_efficiency),
         cmocka_unit_test(test_stick_holds),    cmocka_unit_test(test_breakaway),
         cmocka_unit_test(test_coast_to_rest),  cmocka_unit_test(test_speed_driven_stop),
     };

@@ -415,7 +415,7 @@ def test_step_after_copy_restore_and_reset():
 def test_substep_cap_warns_with_the_figure():
     """A stiff contact on a light follower at dt = 1 ms: 16 automatic sub-steps
     leave h*omega_n = 1e-3/16 * sqrt(1e9 * 0.2**2 / 1e-4) = 39.5 (by hand), above
-    the 0.5 target, so the rig warns and reports the figure."""
+    the target gearsim.AUTO_H_OMEGA_N_MAX, so the rig warns and reports the figure."""
     with pytest.warns(gearsim.SubstepWarning, match=r"h\*omega_n = 39\.5"):
         rig = gearsim.GearRig(backlash_enabled=True, stiffness=1e9, follower_inertia=1e-4)
     assert rig.substeps == 16
@@ -438,6 +438,7 @@ def test_no_substep_warning_when_resolved_or_chosen():
         rigid = gearsim.GearRig()
     assert rig.substeps == 2 and not rig.substeps_capped
     assert rig.contact_h_omega_n == pytest.approx(0.5e-3 * (1e6 * 0.04 / 0.05) ** 0.5, rel=1e-9)
+    assert rig.contact_h_omega_n <= gearsim.AUTO_H_OMEGA_N_MAX
     assert chosen.substeps == 64 and not chosen.substeps_capped
     assert rigid.contact_h_omega_n == 0.0 and rigid.substeps == 1
 

@@ -32,6 +32,9 @@ C_VERSION: str = _ffi.string(_lib.gs_version()).decode()
 TABLE_MAX: int = int(_lib.GS_TABLE_MAX)
 #: Largest contact sub-step count (GS_MAX_SUBSTEPS).
 MAX_SUBSTEPS: int = int(_lib.GS_MAX_SUBSTEPS)
+#: The automatic contact sub-step count's target: the smallest count with
+#: h*omega_n <= AUTO_H_OMEGA_N_MAX (GS_AUTO_H_OMEGA_N_MAX).
+AUTO_H_OMEGA_N_MAX: float = float(_lib.GS_AUTO_H_OMEGA_N_MAX)
 
 __all__ = [
     "Block",
@@ -54,6 +57,7 @@ __all__ = [
     "SubstepWarning",
     "TABLE_MAX",
     "MAX_SUBSTEPS",
+    "AUTO_H_OMEGA_N_MAX",
     "C_VERSION",
     "__version__",
 ]

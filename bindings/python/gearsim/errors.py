@@ -16,7 +16,7 @@
 
 Warnings: :class:`SubstepWarning` (a :class:`UserWarning`): a rig with backlash
 whose automatic contact sub-step count stopped at its cap while the contact is
-still under-resolved (h*omega_n > 0.5).
+still under-resolved (h*omega_n above gearsim.AUTO_H_OMEGA_N_MAX).
 """
 
 from __future__ import annotations
@@ -114,9 +114,10 @@ def with_file(err: GearsimError, file: str | PathLike[str] | None) -> GearsimErr
 
 class SubstepWarning(UserWarning):
     """The automatic contact sub-step count of a backlash rig stopped at its cap
-    (16) with h*omega_n still above 0.5: the contact is stable (backward Euler)
-    but numerically over-damped, so rebounds come out too soft. Lower ``dt``, or
-    set ``contact_substeps`` (up to 64), or soften the contact."""
+    (16) with h*omega_n still above its target (``AUTO_H_OMEGA_N_MAX``): the
+    contact is stable (backward Euler) but numerically over-damped, so rebounds
+    come out too soft. Lower ``dt``, or set ``contact_substeps`` (up to 64), or
+    soften the contact."""
 
 
 _PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))

@@ -279,7 +279,7 @@ class Rig:
         if self._substeps_capped:
             warnings.warn(
                 f"backlash contact: the automatic sub-step count stopped at "
-                f"{int(info.contact_substeps)} with h*omega_n = {self._h_omega_n:.3g} > 0.5 "
+                f"{int(info.contact_substeps)} with h*omega_n = {self._h_omega_n:.3g} > {lib.GS_AUTO_H_OMEGA_N_MAX:g} "
                 f"(dt = {dt_value!r} s): the contact is stable but over-damped; lower dt "
                 f"or set contact_substeps (up to {int(lib.GS_MAX_SUBSTEPS)})",
                 SubstepWarning,
@@ -381,7 +381,8 @@ class Rig:
     @property
     def contact_h_omega_n(self) -> float:
         """h*omega_n of the backlash contact at the chosen sub-step (0 without
-        backlash): <= 0.5 is the automatic target, about 0.05 resolves a rebound."""
+        backlash): gearsim.AUTO_H_OMEGA_N_MAX (0.5) is the automatic target, about
+        0.05 resolves a rebound."""
         return self._h_omega_n
 
     @property
@@ -406,7 +407,8 @@ class Rig:
     @property
     def substeps_capped(self) -> bool:
         """True when the automatic sub-step count stopped at its cap with
-        h*omega_n > 0.5 (a SubstepWarning was issued at construction)."""
+        h*omega_n above gearsim.AUTO_H_OMEGA_N_MAX (a SubstepWarning was issued at
+        construction)."""
         return self._substeps_capped
 
     def __repr__(self) -> str:
