@@ -117,7 +117,11 @@ typedef struct {
 typedef struct {
     gs_real loss_forward;              /* L_fd = 1 - eta       (follower driving) */
     gs_real loss_backward;             /* L_bd = 1/eta - 1     (base driving) */
-    gs_real eta_of_load[GS_TABLE_MAX]; /* 2-D table collapsed at the temperature */
+    /* the 2-D table's temperature bracket: rows t_lo, t_hi, weight t_w (each
+     * lookup interpolates the two load columns it needs in temperature, then
+     * in load: the same arithmetic as collapsing every column first) */
+    int t_lo, t_hi;
+    gs_real t_w;
 } gs_loss_ctx_;
 
 /* Common mesh set-up (the block inits call these after their own checks). */

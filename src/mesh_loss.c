@@ -22,19 +22,11 @@ void gs_mesh_loss_prepare(const gs_mesh_ *m, gs_real temperature, gs_loss_ctx_ *
         eta = gs_interp1(m->table.eta_of_T.x, m->table.eta_of_T.y, m->table.eta_of_T.n, temperature);
         break;
     case GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY: {
-        /* Bilinear = linear in temperature per load column, then in load. The
-         * temperature bracket and weight are found once for all columns; the
-         * law reads only the collapsed column (no loss factors). */
+        /* Bilinear = linear in temperature per load column, then in load
+         * (eta_at_load). The temperature bracket and weight are found once
+         * per step; the law reads no loss factors. */
         const gs_table2_ *t = &m->table.eta_of_T_load;
-        int lo = 0;
-        int hi = 0;
-        gs_real w = GS_R(0.0);
-        gs_interp_bracket(t->x, t->nx, temperature, &lo, &hi, &w);
-        const gs_real *z_lo = t->z[lo];
-        const gs_real *z_hi = t->z[hi];
-        for (int j = 0; j < t->ny; ++j) {
-            ctx->eta_of_load[j] = z_lo[j] + w * (z_hi[j] - z_lo[j]);
-        }
+        gs_interp_bracket(t->x, t->nx, temperature, &ctx->t_lo, &ctx->t_hi, &ctx->t_w);
         ctx->loss_forward = ctx->loss_backward = GS_R(0.0);
         return;
     }
@@ -45,6 +37,23 @@ void gs_mesh_loss_prepare(const gs_mesh_ *m, gs_real temperature, gs_loss_ctx_ *
     }
     ctx->loss_forward = GS_R(1.0) - eta;
     ctx->loss_backward = GS_R(1.0) / eta - GS_R(1.0);
+}
+
+/* The 2-D table's efficiency at the base load `load` (N*m), at the
+ * temperature of the step (ctx): the two load columns around `load`,
+ * each linear in temperature, then linear in load. */
+static gs_real eta_at_load(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real load)
+{
+    const gs_table2_ *t = &m->table.eta_of_T_load;
+    int lo = 0;
+    int hi = 0;
+    gs_real w = GS_R(0.0);
+    gs_interp_bracket(t->y, t->ny, load, &lo, &hi, &w);
+    const gs_real *z_lo = t->z[ctx->t_lo];
+    const gs_real *z_hi = t->z[ctx->t_hi];
+    const gs_real eta_lo = z_lo[lo] + ctx->t_w * (z_hi[lo] - z_lo[lo]);
+    const gs_real eta_hi = z_lo[hi] + ctx->t_w * (z_hi[hi] - z_lo[hi]);
+    return eta_lo + w * (eta_hi - eta_lo);
 }
 
 /* Loss factor c with tau_mesh = T*c of the power-smoothed efficiency laws
@@ -72,8 +81,7 @@ static gs_real coulomb_slope(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real
         return m->load_slope;
     }
     const gs_real load = gs_abs(T) * m->base_load_scale;
-    const gs_real eta = gs_interp1(m->table.eta_of_T_load.y, ctx->eta_of_load, m->table.eta_of_T_load.ny, load);
-    return GS_R(1.0) / eta - GS_R(1.0);
+    return GS_R(1.0) / eta_at_load(m, ctx, load) - GS_R(1.0);
 }
 
 gs_real gs_mesh_loss_torque(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real T, gs_real w)
@@ -162,7 +170,7 @@ void gs_mesh_friction_law(const gs_mesh_ *m, const gs_loss_ctx_ *ctx, gs_real lo
     case GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY: {
         /* k = 1/eta - 1: k/(1 - k) = (1 - eta)/(2*eta - 1), k/(1 + k) = 1 - eta */
         const gs_real load = gs_abs(load_estimate) * m->base_load_scale;
-        const gs_real eta = gs_interp1(m->table.eta_of_T_load.y, ctx->eta_of_load, m->table.eta_of_T_load.ny, load);
+        const gs_real eta = eta_at_load(m, ctx, load);
         const gs_real two_eta_1 = GS_R(2.0) * eta - GS_R(1.0);
         law->k_fd = law->k_bd = GS_R(1.0) / eta - GS_R(1.0);
         law->q_fd = two_eta_1 > GS_R(0.0) ? (GS_R(1.0) - eta) / two_eta_1 : GS_R(-1.0);

@@ -223,6 +223,22 @@ static void geared_masses(const rig_consts_ *r, geared_base_ *base)
     base->den_bd = gs_rig_geared_piece_mass(r->geared_law.l_bd, r->geared_follower_mass, base);
 }
 
+/* The contact's constants on each branch of a meshing law fixed at init
+ * (rig_backlash.c, contact_against); a self-locking branch has none. */
+static void friction_contacts_fill(rig_consts_ *r)
+{
+    const gs_mesh_friction_ *law = &r->loss_law;
+    memset(&r->contact_fd, 0, sizeof r->contact_fd);
+    memset(&r->contact_bd, 0, sizeof r->contact_bd);
+    r->friction_contacts_fixed = r->mesh.backlash && r->loss_static && law->lossy && !r->friction_regularised;
+    if (r->friction_contacts_fixed) {
+        if (!(law->q_fd < GS_R(0.0))) {
+            gs_contact_scale(&r->contact, GS_R(1.0) + r->bound_gain * law->q_fd, &r->contact_fd);
+        }
+        gs_contact_scale(&r->contact, GS_R(1.0) - r->bound_gain * law->q_bd, &r->contact_bd);
+    }
+}
+
 /* The compliant shaft: k over J_eff = J_B + a^2*J_F (base gear and driven
  * side geared rigidly), sub-stepped so that h*omega_c <= 0.2, where the
  * midpoint rule's frequency is within 0.4 % (physics.md 11), up to
@@ -337,7 +353,6 @@ static void rig_fill(rig_consts_ *r, const gs_rig_params *p)
     }
     r->loss_static = r->mesh.friction == GS_FRICTION_NONE || r->mesh.friction == GS_FRICTION_CONSTANT_EFFICIENCY ||
                      r->mesh.friction == GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY;
-    r->law_per_substep = r->mesh.friction == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY;
     memset(&r->loss_ctx, 0, sizeof r->loss_ctx);
     gs_mesh_loss_prepare(&r->mesh, r->mesh.initial_temperature, &r->loss_ctx);
     gs_mesh_friction_law(&r->mesh, &r->loss_ctx, GS_R(0.0), &r->loss_law);
@@ -345,6 +360,7 @@ static void rig_fill(rig_consts_ *r, const gs_rig_params *p)
     r->stribeck_excess = r->stribeck ? p->load_breakaway_friction - p->load_coulomb_friction : GS_R(0.0);
     r->inv_stribeck_speed_sq = r->stribeck ? GS_R(1.0) / (p->load_stribeck_speed * p->load_stribeck_speed) : GS_R(0.0);
     r->follower_free = !r->loss_law.lossy && !r->stribeck && !(r->load_coulomb > GS_R(0.0));
+    friction_contacts_fill(r);
     compliance_fill(r, p);
     ripple_fill(r, p);
 }
@@ -434,7 +450,7 @@ void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *st, const gs_rig_inp
             law = &law_now;
         }
         if (m->backlash) {
-            gs_rig_backlash_step(r, st, ctx, law, in, out);
+            gs_rig_backlash_step(r, st, law, in, out);
         } else if (r->compliant) {
             gs_rig_compliant_step(r, st, ctx, law, in, w_drive_start, out);
         } else {

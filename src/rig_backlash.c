@@ -119,19 +119,23 @@ static inline gs_real bound_value(const friction_bound *b, gs_real sigma, gs_rea
  * drives: the force alternated about the consistent one with a gain of up to
  * q_fd, and an efficiency of 0.5 or less on locked teeth, 0.15 on the full
  * laws, settled on wrong torques or never.) */
-static substep_end contact_against(const rig_consts_ *r, contact_state *c, gs_real w_b_free, gs_real momentum,
-                                   gs_real sigma, const friction_bound *b)
+static inline substep_end contact_against(const rig_consts_ *r, contact_state *c, gs_real w_b_free,
+                                          gs_real momentum, gs_real sigma, const friction_bound *b)
 {
     const gs_real w_f_free = (momentum - r->substep * sigma * b->constant) * r->inv_driven_inertia_sub;
     const gs_real lambda = GS_R(1.0) + r->bound_gain * b->q;
     if (!(b->q > GS_R(0.0) || b->q < GS_R(0.0)) || !(lambda > GS_R(0.0))) {
         return contact_moving(r, c, w_b_free, w_f_free);
     }
-    gs_contact_step_ cs;
-    gs_contact_scale(&r->contact, lambda, &cs);
+    gs_contact_step_ scaled;
+    const gs_contact_step_ *cs = b->follower_drives ? &r->contact_fd : &r->contact_bd;
+    if (!r->friction_contacts_fixed) {
+        gs_contact_scale(&r->contact, lambda, &scaled);
+        cs = &scaled;
+    }
     substep_end e;
     const gs_real u_free = r->mesh.base_radius * w_b_free - r->follower_lever * w_f_free;
-    e.u = gs_contact_solve(&r->mesh, &cs, c->x, u_free, c->f, &c->locked, &e.f, &e.f_spring);
+    e.u = gs_contact_solve(&r->mesh, cs, c->x, u_free, c->f, &c->locked, &e.f, &e.f_spring);
     e.w_f = w_f_free + r->follower_kick * (GS_R(1.0) + b->q) * e.f;
     e.w_b = w_b_free - r->base_kick * e.f;
     return e;
@@ -195,68 +199,70 @@ static inline int slide(const rig_consts_ *r, const follower_friction *fr, conta
  * three: sliding on in the current direction, stuck, or sliding the other
  * way; they are tried in that order and the first consistent one is taken,
  * so a sub-step costs one contact solve while sliding on (more where the
- * law changes branch) and at most three (five with the static-contact lock,
- * see below). *friction is the friction torque on the follower. */
+ * law changes branch) and at most three (five with the static-contact lock:
+ * a locked follower moves with the base whatever its friction does, so a
+ * fourth solve makes the friction oppose that motion; if that releases the
+ * lock and the follower turns back, or the mesh has no bound that way, the
+ * lock's hysteresis leaves no consistent friction, and a fifth runs the
+ * sub-step without it, which never does negative work). One loop over the
+ * stages, so that the solve is inlined once. *friction is the friction
+ * torque on the follower. */
+typedef enum { STAGE_SLIDE_ON, STAGE_STUCK, STAGE_AGAINST_PUSH, STAGE_AGAINST_LOCKED, STAGE_NONE } friction_stage;
+
 static substep_end substep_with_friction(const rig_consts_ *r, const follower_friction *fr, contact_state *c,
                                          gs_real w_f, gs_real w_b_free, gs_real momentum, gs_real *friction,
                                          friction_mode *mode)
 {
     const int locked = c->locked;
-    const gs_real lever_f_last = r->follower_lever * c->f;
+    gs_real guess = r->follower_lever * c->f; /* the force that picks the law's branch */
+    gs_real sigma = w_f > GS_R(0.0) ? GS_R(1.0) : GS_R(-1.0);
+    friction_stage stage = w_f > GS_R(0.0) || w_f < GS_R(0.0) ? STAGE_SLIDE_ON : STAGE_STUCK;
     substep_end e;
-    if (w_f > GS_R(0.0) && slide(r, fr, c, w_b_free, momentum, GS_R(1.0), lever_f_last, &e, friction)) {
-        *mode = FRICTION_FORWARD;
-        if (!(e.w_f < GS_R(0.0))) { /* at exactly 0 any friction within the bounds is consistent */
-            return e;
-        }
-        c->locked = locked;
-    } else if (w_f < GS_R(0.0) && slide(r, fr, c, w_b_free, momentum, GS_R(-1.0), lever_f_last, &e, friction)) {
-        *mode = FRICTION_BACKWARD;
-        if (!(e.w_f > GS_R(0.0))) {
-            return e;
-        }
-        c->locked = locked;
-    }
-    e = contact_stuck(r, c, w_b_free);
-    /* J_F*(0 - w_F) = h*(others + s*r_F*f + friction), the bounds at this f */
-    const gs_real lever_f = r->follower_lever * e.f;
-    const gs_real needed = -(momentum * r->contact.inv_h + lever_f);
-    const friction_bound fwd = bound_at(fr, GS_R(1.0), lever_f);
-    const friction_bound bwd = bound_at(fr, GS_R(-1.0), lever_f);
-    if ((fwd.unbounded || needed >= -bound_value(&fwd, GS_R(1.0), lever_f)) &&
-        (bwd.unbounded || needed <= bound_value(&bwd, GS_R(-1.0), lever_f))) {
-        *friction = needed;
-        *mode = FRICTION_STUCK;
-        return e;
-    }
-    c->locked = locked;
-    /* against the way the rest pushes (a bound that way: the other was not
-     * exceeded) */
-    const gs_real sigma = needed < GS_R(0.0) ? GS_R(1.0) : GS_R(-1.0);
-    if (slide(r, fr, c, w_b_free, momentum, sigma, lever_f, &e, friction)) {
-        *mode = sigma > GS_R(0.0) ? FRICTION_FORWARD : FRICTION_BACKWARD;
-        if (*friction * e.w_f <= GS_R(0.0)) {
-            return e;
-        }
-        /* Only with the static-contact lock: the locked follower moves with
-         * the base whatever its friction does, so the friction opposes that
-         * motion (a fourth solve). If that releases the lock and the
-         * follower turns back, or the mesh has no bound that way, the lock's
-         * hysteresis leaves no consistent friction: the sub-step runs without
-         * it (a fifth solve), which never does negative work. */
-        c->locked = locked;
-        const gs_real sigma_locked = e.w_f > GS_R(0.0) ? GS_R(1.0) : GS_R(-1.0);
-        if (slide(r, fr, c, w_b_free, momentum, sigma_locked, r->follower_lever * e.f, &e, friction)) {
-            *mode = sigma_locked > GS_R(0.0) ? FRICTION_FORWARD : FRICTION_BACKWARD;
-            if (*friction * e.w_f <= GS_R(0.0)) {
+    for (;;) {
+        if (stage == STAGE_STUCK) {
+            e = contact_stuck(r, c, w_b_free);
+            /* J_F*(0 - w_F) = h*(others + s*r_F*f + friction), the bounds at this f */
+            const gs_real lever_f = r->follower_lever * e.f;
+            const gs_real needed = -(momentum * r->contact.inv_h + lever_f);
+            const friction_bound fwd = bound_at(fr, GS_R(1.0), lever_f);
+            const friction_bound bwd = bound_at(fr, GS_R(-1.0), lever_f);
+            if ((fwd.unbounded || needed >= -bound_value(&fwd, GS_R(1.0), lever_f)) &&
+                (bwd.unbounded || needed <= bound_value(&bwd, GS_R(-1.0), lever_f))) {
+                *friction = needed;
+                *mode = FRICTION_STUCK;
                 return e;
             }
             c->locked = locked;
+            /* against the way the rest pushes (a bound that way: the other
+             * was not exceeded) */
+            sigma = needed < GS_R(0.0) ? GS_R(1.0) : GS_R(-1.0);
+            guess = lever_f;
+            stage = STAGE_AGAINST_PUSH;
+            continue;
+        }
+        if (stage == STAGE_NONE) {
+            *friction = GS_R(0.0);
+            *mode = FRICTION_NONE;
+            return contact_moving(r, c, w_b_free, momentum * r->inv_driven_inertia_sub);
+        }
+        if (!slide(r, fr, c, w_b_free, momentum, sigma, guess, &e, friction)) {
+            stage = stage == STAGE_SLIDE_ON ? STAGE_STUCK : STAGE_NONE;
+            continue;
+        }
+        *mode = sigma > GS_R(0.0) ? FRICTION_FORWARD : FRICTION_BACKWARD;
+        /* sliding on: at exactly 0 any friction within the bounds is consistent */
+        if (stage == STAGE_SLIDE_ON ? !(sigma * e.w_f < GS_R(0.0)) : *friction * e.w_f <= GS_R(0.0)) {
+            return e;
+        }
+        c->locked = locked;
+        if (stage == STAGE_AGAINST_PUSH) {
+            sigma = e.w_f > GS_R(0.0) ? GS_R(1.0) : GS_R(-1.0);
+            guess = r->follower_lever * e.f;
+            stage = STAGE_AGAINST_LOCKED;
+        } else {
+            stage = stage == STAGE_SLIDE_ON ? STAGE_STUCK : STAGE_NONE;
         }
     }
-    *friction = GS_R(0.0);
-    *mode = FRICTION_NONE;
-    return contact_moving(r, c, w_b_free, momentum * r->inv_driven_inertia_sub);
 }
 
 /* The follower's friction in one sub-step with backlash: the meshing loss
@@ -310,17 +316,14 @@ static substep_end substep_friction(const rig_consts_ *r, const gs_mesh_friction
     return e;
 }
 
-void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_mesh_friction_ *law,
-                          const gs_rig_input *in, gs_rig_output *out)
+void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_mesh_friction_ *law, const gs_rig_input *in,
+                          gs_rig_output *out)
 {
     const gs_mesh_ *m = &r->mesh;
     const int n = r->substeps;
     const gs_real h = r->substep;
     const int speed_driven = r->base_drive == GS_BASE_SPEED_DRIVEN;
     const int free_follower = r->follower_free;
-    const int law_per_substep = r->law_per_substep;
-    gs_mesh_friction_ table_law; /* its law after the first sub-step */
-    const gs_mesh_friction_ *law_sub = law;
     const gs_real w_b_start = st->base_speed;
     const gs_real w_f_start = st->follower_speed;
     const gs_real push_h = h * (in->load + r->load_offset);
@@ -354,12 +357,8 @@ void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
         if (free_follower) {
             e = contact_moving(r, &c, w_b_free, momentum * r->inv_driven_inertia_sub);
         } else {
-            if (law_per_substep && k > 0) {
-                gs_mesh_friction_law(m, ctx, t_f, &table_law);
-                law_sub = &table_law;
-            }
             gs_mesh_friction_ law_now;
-            const gs_mesh_friction_ *law_k = gs_rig_step_law(r, law_sub, t_f, w_f, &law_now);
+            const gs_mesh_friction_ *law_k = gs_rig_step_law(r, law, t_f, w_f, &law_now);
             e = substep_friction(r, law_k, &c, w_f, w_b_free, momentum, &tau_mesh, &t_f);
         }
         /* x moves with the relative speed the contact was solved for: the end

@@ -93,10 +93,8 @@ typedef struct {
      * constant and load-dependent efficiency) is prepared once, at init. */
     int loss_static;
     /* backlash: no friction on the follower at all (every sub-step is one
-     * contact solve), and a law read again in every sub-step (the 2-D
-     * table, at the last sub-step's base load) */
+     * contact solve) */
     int follower_free;
-    int law_per_substep;
     gs_loss_ctx_ loss_ctx;
     gs_mesh_friction_ loss_law;
     gs_real substep;                /* h = dt/substeps, s */
@@ -112,6 +110,13 @@ typedef struct {
     gs_contact_step_ contact;       /* backward-Euler contact constants for h */
     gs_contact_step_ contact_stuck; /* the same with the driven side held by its friction
                                       (torque-driven base: the base inertia alone) */
+    /* the contact seen through the follower's friction on each branch of a
+     * law fixed at init (loss_static, not regularised; rig_backlash.c):
+     * h/m_eff times 1 + bound_gain*q_fd (the follower drives) and
+     * 1 - bound_gain*q_bd (the base drives) */
+    int friction_contacts_fixed;
+    gs_contact_step_ contact_fd;
+    gs_contact_step_ contact_bd;
     /* Stribeck friction: F(v) = F_C + excess*exp(-v^2/v_S^2) */
     int stribeck;
     gs_real stribeck_excess;       /* F_brk - F_C, N*m or N */
@@ -208,9 +213,9 @@ void gs_rig_compliant_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss
                            const gs_mesh_friction_ *law, const gs_rig_input *in, gs_real w_d_start, gs_rig_output *out);
 
 /* Backlash (rig_backlash.c): the contact sub-steps of either base drive.
- * law is the step's; the 2-D table's is read again per sub-step. Advances
- * the angles and the contact state. */
-void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_mesh_friction_ *law,
-                          const gs_rig_input *in, gs_rig_output *out);
+ * law is the step's, for every sub-step (the 2-D table's at the last step's
+ * T_F). Advances the angles and the contact state. */
+void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_mesh_friction_ *law, const gs_rig_input *in,
+                          gs_rig_output *out);
 
 #endif /* GS_RIG_INTERNAL_H */
