@@ -101,7 +101,7 @@ static inline int follower_drives_at(const follower_friction *fr, gs_real sigma,
 
 static inline friction_bound bound_at(const follower_friction *fr, gs_real sigma, gs_real lever_f)
 {
-    return bound_branch(fr, follower_drives_at(fr, sigma, lever_f));
+    return bound_branch(fr, fr->law->lossy && follower_drives_at(fr, sigma, lever_f));
 }
 
 static inline gs_real bound_value(const friction_bound *b, gs_real sigma, gs_real lever_f)
@@ -120,13 +120,18 @@ static inline gs_real bound_value(const friction_bound *b, gs_real sigma, gs_rea
  * q_fd, and an efficiency of 0.5 or less on locked teeth, 0.15 on the full
  * laws, settled on wrong torques or never.) */
 static inline substep_end contact_against(const rig_consts_ *r, contact_state *c, gs_real w_b_free,
-                                          gs_real momentum, gs_real sigma, const friction_bound *b)
+                                          gs_real momentum, gs_real sigma, const friction_bound *b,
+                                          gs_real lever_f_guess, gs_real *friction)
 {
-    const gs_real w_f_free = (momentum - r->substep * sigma * b->constant) * r->inv_driven_inertia_sub;
     const gs_real lambda = GS_R(1.0) + r->bound_gain * b->q;
     if (!(b->q > GS_R(0.0) || b->q < GS_R(0.0)) || !(lambda > GS_R(0.0))) {
-        return contact_moving(r, c, w_b_free, w_f_free);
+        /* a bound that does not change with the force, or (lambda <= 0: an
+         * efficiency of 0 where the base drives, only by rounding) one held
+         * at the guess */
+        *friction = -sigma * bound_value(b, sigma, lever_f_guess);
+        return contact_moving(r, c, w_b_free, (momentum + r->substep * *friction) * r->inv_driven_inertia_sub);
     }
+    const gs_real w_f_free = (momentum - r->substep * sigma * b->constant) * r->inv_driven_inertia_sub;
     gs_contact_step_ scaled;
     const gs_contact_step_ *cs = b->follower_drives ? &r->contact_fd : &r->contact_bd;
     if (!r->friction_contacts_fixed) {
@@ -138,6 +143,7 @@ static inline substep_end contact_against(const rig_consts_ *r, contact_state *c
     e.u = gs_contact_solve(&r->mesh, cs, c->x, u_free, c->f, &c->locked, &e.f, &e.f_spring);
     e.w_f = w_f_free + r->follower_kick * (GS_R(1.0) + b->q) * e.f;
     e.w_b = w_b_free - r->base_kick * e.f;
+    *friction = -sigma * bound_value(b, sigma, r->follower_lever * e.f);
     return e;
 }
 
@@ -146,23 +152,20 @@ static inline substep_end contact_against(const rig_consts_ *r, contact_state *c
  * the bound level + c0), where the force then sits. */
 static substep_end slide_other_branch(const rig_consts_ *r, const follower_friction *fr, contact_state *c,
                                       gs_real w_b_free, gs_real momentum, gs_real sigma, int first_drives,
-                                      gs_real *friction)
+                                      gs_real lever_f_guess, gs_real *friction)
 {
     const int locked = c->locked;
     friction_bound b = bound_branch(fr, !first_drives);
     if (!b.unbounded) {
-        const substep_end e = contact_against(r, c, w_b_free, momentum, sigma, &b);
-        const gs_real lever_f = r->follower_lever * e.f;
-        if (follower_drives_at(fr, sigma, lever_f) == b.follower_drives) {
-            *friction = -sigma * bound_value(&b, sigma, lever_f);
+        const substep_end e = contact_against(r, c, w_b_free, momentum, sigma, &b, lever_f_guess, friction);
+        if (follower_drives_at(fr, sigma, r->follower_lever * e.f) == b.follower_drives) {
             return e;
         }
         c->locked = locked;
     }
     b.constant = fr->level + fr->law->c0;
     b.q = GS_R(0.0);
-    *friction = -sigma * b.constant;
-    return contact_against(r, c, w_b_free, momentum, sigma, &b);
+    return contact_against(r, c, w_b_free, momentum, sigma, &b, lever_f_guess, friction);
 }
 
 /* Sliding the way sigma, the law on its branch at the force lever_f_guess
@@ -173,8 +176,8 @@ static inline int slide(const rig_consts_ *r, const follower_friction *fr, conta
                         gs_real momentum, gs_real sigma, gs_real lever_f_guess, substep_end *e, gs_real *friction)
 {
     if (!fr->law->lossy) { /* the load's friction alone: a constant bound */
-        *friction = -sigma * fr->level;
-        *e = contact_moving(r, c, w_b_free, (momentum + r->substep * *friction) * r->inv_driven_inertia_sub);
+        const friction_bound level = {fr->level, GS_R(0.0), 0, 0};
+        *e = contact_against(r, c, w_b_free, momentum, sigma, &level, lever_f_guess, friction);
         return 1;
     }
     const int locked = c->locked;
@@ -182,14 +185,12 @@ static inline int slide(const rig_consts_ *r, const follower_friction *fr, conta
     if (b.unbounded) {
         return 0;
     }
-    *e = contact_against(r, c, w_b_free, momentum, sigma, &b);
-    const gs_real lever_f = r->follower_lever * e->f;
-    if (follower_drives_at(fr, sigma, lever_f) == b.follower_drives) {
-        *friction = -sigma * bound_value(&b, sigma, lever_f);
+    *e = contact_against(r, c, w_b_free, momentum, sigma, &b, lever_f_guess, friction);
+    if (follower_drives_at(fr, sigma, r->follower_lever * e->f) == b.follower_drives) {
         return 1;
     }
     c->locked = locked;
-    *e = slide_other_branch(r, fr, c, w_b_free, momentum, sigma, b.follower_drives, friction);
+    *e = slide_other_branch(r, fr, c, w_b_free, momentum, sigma, b.follower_drives, lever_f_guess, friction);
     return 1;
 }
 
