@@ -353,6 +353,7 @@ static void rig_fill(rig_consts_ *r, const gs_rig_params *p)
     }
     r->loss_static = r->mesh.friction == GS_FRICTION_NONE || r->mesh.friction == GS_FRICTION_CONSTANT_EFFICIENCY ||
                      r->mesh.friction == GS_FRICTION_LOAD_DEPENDENT_EFFICIENCY;
+    r->law_per_substep = r->mesh.friction == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY;
     memset(&r->loss_ctx, 0, sizeof r->loss_ctx);
     gs_mesh_loss_prepare(&r->mesh, r->mesh.initial_temperature, &r->loss_ctx);
     gs_mesh_friction_law(&r->mesh, &r->loss_ctx, GS_R(0.0), &r->loss_law);
@@ -450,7 +451,7 @@ void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *st, const gs_rig_inp
             law = &law_now;
         }
         if (m->backlash) {
-            gs_rig_backlash_step(r, st, law, in, out);
+            gs_rig_backlash_step(r, st, ctx, law, in, out);
         } else if (r->compliant) {
             gs_rig_compliant_step(r, st, ctx, law, in, w_drive_start, out);
         } else {

@@ -317,14 +317,17 @@ static substep_end substep_friction(const rig_consts_ *r, const gs_mesh_friction
     return e;
 }
 
-void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_mesh_friction_ *law, const gs_rig_input *in,
-                          gs_rig_output *out)
+void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_mesh_friction_ *law,
+                          const gs_rig_input *in, gs_rig_output *out)
 {
     const gs_mesh_ *m = &r->mesh;
     const int n = r->substeps;
     const gs_real h = r->substep;
     const int speed_driven = r->base_drive == GS_BASE_SPEED_DRIVEN;
     const int free_follower = r->follower_free;
+    const int law_per_substep = r->law_per_substep;
+    gs_mesh_friction_ table_law; /* its law after the first sub-step */
+    const gs_mesh_friction_ *law_sub = law;
     const gs_real w_b_start = st->base_speed;
     const gs_real w_f_start = st->follower_speed;
     const gs_real push_h = h * (in->load + r->load_offset);
@@ -358,8 +361,12 @@ void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_mesh_
         if (free_follower) {
             e = contact_moving(r, &c, w_b_free, momentum * r->inv_driven_inertia_sub);
         } else {
+            if (law_per_substep && k > 0) {
+                gs_mesh_friction_law(m, ctx, t_f, &table_law);
+                law_sub = &table_law;
+            }
             gs_mesh_friction_ law_now;
-            const gs_mesh_friction_ *law_k = gs_rig_step_law(r, law, t_f, w_f, &law_now);
+            const gs_mesh_friction_ *law_k = gs_rig_step_law(r, law_sub, t_f, w_f, &law_now);
             e = substep_friction(r, law_k, &c, w_f, w_b_free, momentum, &tau_mesh, &t_f);
         }
         /* x moves with the relative speed the contact was solved for: the end

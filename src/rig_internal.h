@@ -93,8 +93,10 @@ typedef struct {
      * constant and load-dependent efficiency) is prepared once, at init. */
     int loss_static;
     /* backlash: no friction on the follower at all (every sub-step is one
-     * contact solve) */
+     * contact solve), and a law read again in every sub-step (the 2-D
+     * table, at the last sub-step's base load) */
     int follower_free;
+    int law_per_substep;
     gs_loss_ctx_ loss_ctx;
     gs_mesh_friction_ loss_law;
     gs_real substep;                /* h = dt/substeps, s */
@@ -213,9 +215,11 @@ void gs_rig_compliant_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss
                            const gs_mesh_friction_ *law, const gs_rig_input *in, gs_real w_d_start, gs_rig_output *out);
 
 /* Backlash (rig_backlash.c): the contact sub-steps of either base drive.
- * law is the step's, for every sub-step (the 2-D table's at the last step's
- * T_F). Advances the angles and the contact state. */
-void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_mesh_friction_ *law, const gs_rig_input *in,
-                          gs_rig_output *out);
+ * law is the step's; the 2-D table's is read again per sub-step (held over
+ * the step, its load lags by a step, an error the sub-steps do not shrink:
+ * the solve_ivp reference tests caught it). Advances the angles and the
+ * contact state. */
+void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_mesh_friction_ *law,
+                          const gs_rig_input *in, gs_rig_output *out);
 
 #endif /* GS_RIG_INTERNAL_H */

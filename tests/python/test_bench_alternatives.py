@@ -15,11 +15,14 @@ follower speed.) What the tests hold:
   2 automatic contact sub-steps, K = 1e6 N/m so h*omega_n = 0.45): both are
   first-order fixed-step schemes with the same backward-Euler contact; they
   time the mesh loss differently within a step (python_loop_full evaluates
-  the D1 loss on the previous sub-step's contact force and the table's eta at
-  the previous T_F), an O(h) difference. Measured: 1.4e-2 of the peak base
-  torque (RMS 5.4e-3), 1.3e-3 of the peak follower speed, 3.4e-3 of the peak
-  backlash position, 2.6e-3 K of temperature ("hot"). Tolerances: DIRECT
-  below, about twice those. With the loss off (and no Coulomb friction) the
+  the D1 loss on the previous sub-step's contact force, gearsim since
+  2026-11-27 on the sub-step's own force, solved with the contact; both read
+  the table's eta at the previous T_F), an O(h) difference. Measured
+  (sg_full / hot): 2.6e-2 / 3.6e-2 of the peak base torque, 3.1e-3 / 3.2e-3
+  of the peak follower speed, 4.0e-3 / 7.8e-3 of the peak backlash position,
+  4.4e-4 / 5.0e-2 K of temperature. (With gearsim's loss lagging too, as
+  python_loop_full's does: 1.4e-2, 1.3e-3, 3.4e-3, 2.6e-3 K.) Tolerances:
+  DIRECT below, about twice those. With the loss off (and no Coulomb friction) the
   two agree to 1e-14, and the difference is first order in the sub-step:
   1.2e-2 / 5.4e-3 / 2.6e-3 / 1.2e-3 of the peak base torque at 8 / 16 / 32 /
   64 sub-steps. Checked below: at 32 sub-steps at most DIRECT_CONVERGENCE =
@@ -28,7 +31,8 @@ follower speed.) What the tests hold:
 - Both against the reference at the benchmark's settings: a coarse
   discretisation of a stiff contact (backward Euler at h*omega_n = 0.45
   damps the contact oscillation numerically by ~9 % per sub-step), measured
-  0.18 RMS of the base torque and 5.4e-3 RMS of the follower speed, for both.
+  0.18 RMS of the base torque and 5.4e-3 to 5.8e-3 RMS of the follower
+  speed, for both.
   Tolerance COARSE_REF (0.25 / 1e-2): a gross check only.
 - Both against the reference at 32 sub-steps (h*omega_n = 0.028): measured
   2.1e-2 RMS base torque, 2.8e-3 of the peak follower speed. Tolerances
@@ -62,8 +66,8 @@ BENCH = Path(__file__).resolve().parents[2] / "bench"
 ORACLES = Path(__file__).resolve().parent / "oracles"
 
 # python_loop_full vs gearsim at the benchmark settings: fractions of the peak
-DIRECT = {"base_torque": 3e-2, "follower_speed": 3e-3, "backlash_position": 1e-2}
-DIRECT_TEMPERATURE_K = 1e-2
+DIRECT = {"base_torque": 7e-2, "follower_speed": 7e-3, "backlash_position": 1.6e-2}
+DIRECT_TEMPERATURE_K = 0.1
 # the direct difference at 32 sub-steps, as a fraction of the one at 8
 DIRECT_CONVERGENCE = 0.5
 # both vs the reference at the benchmark settings: RMS fractions (gross check)

@@ -446,29 +446,34 @@ def test_no_substep_warning_when_resolved_or_chosen():
 @pytest.mark.parametrize("hard_stop_model", ["smooth", "full_damped", "full_undamped"])
 @pytest.mark.parametrize("contact_no_pull", [True, False])
 @pytest.mark.parametrize("contact_lock_enabled", [False, True])
+@pytest.mark.parametrize(("efficiency", "contact_substeps"), [(0.5, 0), (0.5, 1), (0.1, 3)])
 def test_backlash_options_keep_the_settled_torques(
-    hard_stop_model, contact_no_pull, contact_lock_enabled
+    hard_stop_model, contact_no_pull, contact_lock_enabled, efficiency, contact_substeps
 ):
     """The backlash options the C matrix (tests/c/test_settled.c) does not vary: the
-    contact lock and the no-pull clip, with a load offset. Once the teeth rest
-    against each other the base torque is the rigid law's, by hand (g = 2,
-    opposite rotation, eta = 0.5, load + offset = 1 N*m on the follower):
-    base drives (omega_B = +10, the load opposes omega_F = -5): 1/(g*eta) = 1.0;
-    follower drives (omega_B = -10, the load aids omega_F = +5): eta/g = 0.25."""
+    contact lock and the no-pull clip, with a load offset; and, through the
+    package, the low efficiencies and odd sub-step counts of
+    test_settled_low_efficiency. Once the teeth rest against each other the base
+    torque is the rigid law's, by hand (g = 2, opposite rotation, load + offset =
+    1 N*m on the follower): base drives (omega_B = +10, the load opposes
+    omega_F = -5): 1/(g*eta); follower drives (omega_B = -10, the load aids
+    omega_F = +5): eta/g. (With the meshing loss lagging the contact force by a
+    sub-step, eta = 0.5 on locked teeth at 1 sub-step alternated between 0.383
+    and 0.117 instead of 0.25.)"""
     model = gearsim.Model(
         block="simple_gear",
         block_params=dict(
             teeth_ratio=2.0,
             friction_model="constant_efficiency",
-            efficiency_const=0.5,
+            efficiency_const=efficiency,
             backlash_enabled=True,
             hard_stop_model=hard_stop_model,
             contact_no_pull=contact_no_pull,
             contact_lock_enabled=contact_lock_enabled,
         ),
-        rig_params=dict(load_offset=0.3),
+        rig_params=dict(load_offset=0.3, contact_substeps=contact_substeps),
     )
-    for speed, expected in ((10.0, 1.0), (-10.0, 0.25)):
+    for speed, expected in ((10.0, 1.0 / (2.0 * efficiency)), (-10.0, efficiency / 2.0)):
         rig = model.rig(dt=1e-3)
         out = rig.run(base_speed=np.full(3000, speed), load=np.full(3000, 0.7))
         assert out.base_torque[-1] == pytest.approx(expected, rel=1e-9)

@@ -77,11 +77,16 @@ Tolerances and why (measured worst over the cases in brackets):
   <= TORQUE_RMS = 3e-2 of the RMS torque [1.9e-2: the torque-driven
   full_undamped gear, whose undamped rebounds re-impact at low relative speed].
 - Convergence: the RMS errors of the torques and of the driven speed with 64
-  sub-steps must be at most CONVERGENCE = 0.5 of those with 16 [0.17-0.43].
-  A first-order method gives 0.25; the phase of each impact within its
-  sub-step makes single impacts converge erratically, hence the margin. A
-  modelling difference between C and reference (a wrong loss law, a sign, a
-  missing term) would leave an error that does not shrink with h.
+  sub-steps must be at most CONVERGENCE = 0.6 of those with 16 [0.17-0.51].
+  A first-order method gives 0.25 where the error is smooth. Where impacts
+  dominate it (the torque-driven full_undamped gear with the 2-D table,
+  0.51), an O(h) error in the impact's timing puts an O(1) error into one
+  step's mean, an RMS over the run of order sqrt(h): 0.5 at 4x the
+  sub-steps, and the phase of each impact within its sub-step makes single
+  impacts converge erratically (0.85 from 16 to 32 sub-steps, 0.59 from 32
+  to 64, in that run). A modelling difference between C and reference (a
+  wrong loss law, a sign, a missing term) would leave an error that does
+  not shrink with h.
 """
 
 from __future__ import annotations
@@ -107,7 +112,7 @@ SETTLED_RTOL = 1e-7
 SPEED_MAX = 5e-3
 TORQUE_MAX = 3e-2
 TORQUE_RMS = 3e-2
-CONVERGENCE = 0.5
+CONVERGENCE = 0.6
 TEMPERATURE_K = 0.03
 SETTLED_THERMAL_RTOL = 5e-4
 
