@@ -115,8 +115,8 @@ typedef struct {
 /* Mesh-loss quantities that depend only on the temperature, evaluated once
  * per step. */
 typedef struct {
-    gs_real loss_forward;              /* L_fd = 1 - eta       (follower driving) */
-    gs_real loss_backward;             /* L_bd = 1/eta - 1     (base driving) */
+    gs_real loss_forward;  /* L_fd = 1 - eta       (follower driving) */
+    gs_real loss_backward; /* L_bd = 1/eta - 1     (base driving) */
     /* the 2-D table's temperature bracket: rows t_lo, t_hi, weight t_w (each
      * lookup interpolates the two load columns it needs in temperature, then
      * in load: the same arithmetic as collapsing every column first) */

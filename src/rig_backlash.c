@@ -119,9 +119,9 @@ static inline gs_real bound_value(const friction_bound *b, gs_real sigma, gs_rea
  * drives: the force alternated about the consistent one with a gain of up to
  * q_fd, and an efficiency of 0.5 or less on locked teeth, 0.15 on the full
  * laws, settled on wrong torques or never.) */
-static inline substep_end contact_against(const rig_consts_ *r, contact_state *c, gs_real w_b_free,
-                                          gs_real momentum, gs_real sigma, const friction_bound *b,
-                                          gs_real lever_f_guess, gs_real *friction)
+static inline substep_end contact_against(const rig_consts_ *r, contact_state *c, gs_real w_b_free, gs_real momentum,
+                                          gs_real sigma, const friction_bound *b, gs_real lever_f_guess,
+                                          gs_real *friction)
 {
     const gs_real lambda = GS_R(1.0) + r->bound_gain * b->q;
     if (!(b->q > GS_R(0.0) || b->q < GS_R(0.0)) || !(lambda > GS_R(0.0))) {

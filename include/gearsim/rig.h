@@ -52,14 +52,14 @@ extern "C" {
 #define gs_rig_init_gear GS_PRECISION_NAME(gs_rig_init_gear)
 #define gs_rig_init_rack GS_PRECISION_NAME(gs_rig_init_rack)
 
-#define GS_MAX_SUBSTEPS      64
+#define GS_MAX_SUBSTEPS       64
 /* The automatic sub-step count (contact_substeps = 0) is the smallest with
  * h*omega_n <= GS_AUTO_H_OMEGA_N_MAX, and stops at GS_AUTO_SUBSTEPS_MAX; see
  * gs_rig_info. */
 #define GS_AUTO_H_OMEGA_N_MAX 0.5
 #define GS_AUTO_SUBSTEPS_MAX  16
 /* Harmonics of the torque ripple, per revolution and per tooth mesh. */
-#define GS_RIPPLE_HARMONICS  2
+#define GS_RIPPLE_HARMONICS   2
 
 /* How the base shaft is driven (GS_OPTIONS_BaseDrive; default speed) and
  * which temperature the losses use (GS_OPTIONS_TemperatureSource: the thermal
@@ -138,7 +138,7 @@ GS_API gs_rig_params gs_rig_params_default(void);
 typedef struct {
     int contact_substeps;         /* sub-steps per step (1 without backlash) */
     gs_real contact_h_omega_n;    /* h*omega_n, omega_n = sqrt(K/m_eff): the contact's
-                                   accuracy figure (0 without backlash); <= 0.5 is the
+                                   accuracy figure (0 without backlash); <= GS_AUTO_H_OMEGA_N_MAX is the
                                    automatic target, about 0.05 resolves a rebound */
     int substeps_capped;          /* 1 when contact_substeps = 0 chose GS_AUTO_SUBSTEPS_MAX
                                    and h*omega_n is still above 0.5: the contact is

@@ -1078,10 +1078,13 @@ static void test_speed_driven_stop(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_settled_matrix), cmocka_unit_test(test_settled_compliant_shaft),
+        cmocka_unit_test(test_settled_matrix),
+        cmocka_unit_test(test_settled_compliant_shaft),
         cmocka_unit_test(test_settled_low_efficiency),
-        cmocka_unit_test(test_stick_holds),    cmocka_unit_test(test_breakaway),
-        cmocka_unit_test(test_coast_to_rest),  cmocka_unit_test(test_speed_driven_stop),
+        cmocka_unit_test(test_stick_holds),
+        cmocka_unit_test(test_breakaway),
+        cmocka_unit_test(test_coast_to_rest),
+        cmocka_unit_test(test_speed_driven_stop),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -279,7 +279,8 @@ class Rig:
         if self._substeps_capped:
             warnings.warn(
                 f"backlash contact: the automatic sub-step count stopped at "
-                f"{int(info.contact_substeps)} with h*omega_n = {self._h_omega_n:.3g} > {lib.GS_AUTO_H_OMEGA_N_MAX:g} "
+                f"{int(info.contact_substeps)} with h*omega_n = {self._h_omega_n:.3g} "
+                f"> {lib.GS_AUTO_H_OMEGA_N_MAX:g} "
                 f"(dt = {dt_value!r} s): the contact is stable but over-damped; lower dt "
                 f"or set contact_substeps (up to {int(lib.GS_MAX_SUBSTEPS)})",
                 SubstepWarning,
