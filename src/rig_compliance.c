@@ -24,7 +24,7 @@
 void gs_rig_compliant_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx,
                            const gs_mesh_friction_ *law, const gs_rig_input *in, gs_real w_d_start, gs_rig_output *out)
 {
-    const int law_per_substep = r->mesh.friction == GS_FRICTION_TEMPERATURE_LOAD_DEPENDENT_EFFICIENCY;
+    const int law_per_substep = r->law_per_substep;
     const gs_mesh_ *m = &r->mesh;
     const gs_real a = m->inv_ratio;
     const gs_real h = r->compliance_h;

@@ -93,9 +93,10 @@ typedef struct {
      * constant and load-dependent efficiency) is prepared once, at init. */
     int loss_static;
     /* backlash: no friction on the follower at all (every sub-step is one
-     * contact solve), and a law read again in every sub-step (the 2-D
-     * table, at the last sub-step's base load) */
+     * contact solve) */
     int follower_free;
+    /* backlash and compliant shaft: a law read again in every sub-step (the
+     * 2-D table, at the last sub-step's base load) */
     int law_per_substep;
     gs_loss_ctx_ loss_ctx;
     gs_mesh_friction_ loss_law;
