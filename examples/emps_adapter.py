@@ -26,7 +26,7 @@ it is the benchmark's offset with the opposite sign.
 The data stays where it is: this script reads DATA_EMPS.mat and writes a CSV
 and a starting model (mass + viscous friction, rough guesses) wherever you ask.
 
-    python examples/emps_adapter.py [--data ../shared/data/emps/DATA_EMPS.mat] --out DIR
+    python examples/emps_adapter.py [--data DATA_EMPS.mat] --out DIR
     gearsim diagnose DIR/emps.csv --model DIR/emps-start.toml
 """
 
@@ -40,9 +40,17 @@ import sys
 PUBLISHED = {"M": 95.1089, "Fv": 203.5034, "Fc": 20.3935, "offset": -3.1648}
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-DEFAULT_DATA = os.path.normpath(
-    os.path.join(HERE, "..", "..", "shared", "data", "emps", "DATA_EMPS.mat")
-)
+#: Where DATA_EMPS.mat is looked for: the file this environment variable
+#: names, else data/emps/DATA_EMPS.mat in the repository (ignored by git: the
+#: data's license is unstated, so gearsim does not distribute it).
+DATA_ENV = "GEARSIM_EMPS_DATA"
+REPO_DATA = os.path.normpath(os.path.join(HERE, "..", "data", "emps", "DATA_EMPS.mat"))
+WHERE = f"${DATA_ENV}, else data/emps/DATA_EMPS.mat"
+
+
+def default_data_path() -> str:
+    """The EMPS data's path: $GEARSIM_EMPS_DATA, else the repository's data/emps/."""
+    return os.environ.get(DATA_ENV) or REPO_DATA
 
 
 def load_emps(path: str, radius: float = 0.01, cutoff_hz: float = 100.0):
@@ -90,9 +98,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    ap.add_argument(
-        "--data", default=DEFAULT_DATA, help="path of DATA_EMPS.mat (default: %(default)s)"
-    )
+    ap.add_argument("--data", default=None, help=f"path of DATA_EMPS.mat (default: {WHERE})")
     ap.add_argument("--out", required=True, help="directory for emps.csv and emps-start.toml")
     ap.add_argument(
         "--radius", type=float, default=0.01, help="assumed pinion radius in m (default 0.01)"
@@ -101,10 +107,13 @@ def main(argv: list[str] | None = None) -> int:
         "--cutoff", type=float, default=100.0, help="position low-pass cut-off in Hz (default 100)"
     )
     args = ap.parse_args(argv)
+    if args.data is None:
+        args.data = default_data_path()
     if not os.path.exists(args.data):
         sys.stderr.write(
-            f"emps_adapter: error: {args.data}: no such file (the EMPS data lives in "
-            f"../shared/data/emps and is not part of this repository)\n"
+            f"emps_adapter: error: {args.data}: no such file (DATA_EMPS.mat is not part of "
+            f"this repository: download it from nonlinearbenchmark.org and put it in "
+            f"data/emps/ or name it in {DATA_ENV})\n"
         )
         return 2
     from gearsim.analysis import write_measurement

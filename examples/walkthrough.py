@@ -16,7 +16,8 @@ missing effect, fit it, watch the error fall.
    score; docs/analysis.md).
 4. Reveals what was hidden in the demo data and sets it beside the fit.
 5. Writes report/report.html (self-contained) and the PNG figures.
-6. If the real EMPS data is present (../shared/data/emps/DATA_EMPS.mat), does
+6. If the real EMPS data is present ($GEARSIM_EMPS_DATA, else
+   data/emps/DATA_EMPS.mat; README "Real data"), does
    the same on it (report/emps/) and compares the fitted mass and friction
    with the published values.
 
@@ -214,19 +215,21 @@ def emps(out: str, data: str) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    import emps_adapter  # beside this script: where the EMPS data is looked for
+
     ap = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     ap.add_argument("--out", default="report", help="report directory (default: report/)")
     ap.add_argument(
         "--emps",
-        default=os.path.normpath(
-            os.path.join(HERE, "..", "..", "shared", "data", "emps", "DATA_EMPS.mat")
-        ),
-        help="path of DATA_EMPS.mat; skipped when absent (default: %(default)s)",
+        default=None,
+        help=f"path of DATA_EMPS.mat; skipped when absent (default: {emps_adapter.WHERE})",
     )
     ap.add_argument("--no-emps", action="store_true", help="skip the real-data part")
     args = ap.parse_args(argv)
+    if args.emps is None:
+        args.emps = emps_adapter.default_data_path()
     os.makedirs(args.out, exist_ok=True)
     rc = demo(args.out)
     if rc == 0 and not args.no_emps:

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The main job: sets up gearsim (scripts/setup.sh), then runs the compare ->
 # diagnose -> fit walkthrough on the bundled demo measurement (and on the EMPS
-# data when ../shared/data/emps is present) and writes report/report.html.
+# data when DATA_EMPS.mat is present: README, Real data) and writes report/report.html.
 # Extra arguments go to examples/walkthrough.py (e.g. --no-emps, --out DIR).
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -6,6 +6,7 @@ offset; gearsim.analysis.synthetic)."""
 from __future__ import annotations
 
 import os
+import sys
 from functools import cache
 
 import pytest
@@ -14,7 +15,6 @@ import gearsim
 from gearsim.analysis import synthetic as S
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
-EMPS = os.path.normpath(os.path.join(REPO, "..", "shared", "data", "emps", "DATA_EMPS.mat"))
 
 #: The effect names of the measurement format (docs/measurement-format.md
 #: section 3), written out here as the tests' own copy of the contract: the
@@ -144,8 +144,14 @@ def measurement(block: str, effects: tuple[str, ...], seed: int = 3, samples: in
 
 
 def emps_or_skip() -> str:
-    if not os.path.exists(EMPS):
+    """The EMPS data's path (examples/emps_adapter.py says where it is looked
+    for), or skip with the reason."""
+    sys.path.insert(0, os.path.join(REPO, "examples"))
+    import emps_adapter
+
+    path = emps_adapter.default_data_path()
+    if not os.path.exists(path):
         pytest.skip(
-            f"EMPS data not found at {EMPS} (../shared/data/emps is not part of the repository)"
+            f"EMPS data not found at {path} (not part of the repository; README, Real data)"
         )
-    return EMPS
+    return path
