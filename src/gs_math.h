@@ -29,6 +29,14 @@ static inline gs_real gs_abs(gs_real x)
 #else
 #define GS_NOINLINE
 #endif
+/* Inlines a body into each of a few callers that fix some of its arguments
+ * to constants, so that each copy drops the branches those decide (the
+ * backlash step's drive and friction variants). */
+#if defined(__GNUC__)
+#define GS_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define GS_ALWAYS_INLINE inline
+#endif
 
 static inline gs_real gs_min(gs_real a, gs_real b)
 {

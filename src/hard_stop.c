@@ -1,6 +1,7 @@
-/* hard_stop.c - the backlash contact laws (physics.md 4.3-4.5), the spring's
- * energy and the constants of the backward-Euler contact solve, which itself
- * lives in contact.h. */
+/* hard_stop.c - the backlash contact laws (physics.md 4.3-4.5) and the
+ * constants of the backward-Euler contact solve, which itself lives in
+ * contact.h (the spring's energy and the scaled constants, used every step,
+ * are inline in mesh.h). */
 #include "contact.h"
 
 /* Force and its derivative along u when x = x0 + h*u (dfdu = h*df/dx + df/dv). */
@@ -50,29 +51,6 @@ gs_real gs_contact_force(const gs_mesh_ *m, gs_real x, gs_real u, gs_real *f_spr
     return contact_force_d(m, x, u, GS_R(0.0), &unused, f_spring);
 }
 
-gs_real gs_contact_energy(const gs_mesh_ *m, gs_real x)
-{
-    gs_real delta = GS_R(0.0);
-    if (x > m->half_gap) {
-        delta = x - m->half_gap;
-    } else if (x < -m->half_gap) {
-        delta = -m->half_gap - x;
-    }
-    if (m->hard_stop == GS_HARD_STOP_SMOOTH) {
-        /* integral of S(s/d)*K*s ds: K*(3 s^4/(4 d^2) - 2 s^5/(5 d^3)) up to d, then linear spring */
-        const gs_real d = GS_R(1.0) / m->inv_transition;
-        const gs_real s = gs_min(delta, d);
-        const gs_real s2 = s * s;
-        const gs_real ramp = m->stiffness * s2 * s2 * m->inv_transition * m->inv_transition *
-                             (GS_R(0.75) - GS_R(0.4) * s * m->inv_transition);
-        if (delta > d) {
-            return ramp + GS_R(0.5) * m->stiffness * (delta * delta - d * d);
-        }
-        return ramp;
-    }
-    return GS_R(0.5) * m->stiffness * delta * delta;
-}
-
 void gs_contact_prepare(const gs_mesh_ *m, gs_real h, gs_real inv_mass, gs_contact_step_ *cs)
 {
     cs->h = h;
@@ -90,20 +68,4 @@ void gs_contact_prepare(const gs_mesh_ *m, gs_real h, gs_real inv_mass, gs_conta
     cs->inv_affine_undamped = GS_R(1.0) / (GS_R(1.0) + cs->c * m->stiffness * h);
     cs->transition = m->inv_transition > GS_R(0.0) ? GS_R(1.0) / m->inv_transition : GS_R(0.0);
     cs->law_force_conditioned = cs->kappa < GS_R(1.0);
-}
-
-void gs_contact_scale(const gs_contact_step_ *cs, gs_real lambda, gs_contact_step_ *scaled)
-{
-    const gs_real inv_lambda = GS_R(1.0) / lambda;
-    *scaled = *cs;
-    scaled->c = cs->c * lambda;
-    scaled->inv_c = cs->inv_c * inv_lambda;
-    scaled->c_stiffness = cs->c_stiffness * lambda;
-    scaled->c_damping = cs->c_damping * lambda;
-    scaled->kappa = cs->kappa * lambda;
-    scaled->kappa_spring = cs->kappa_spring * lambda;
-    scaled->inv_kappa = cs->inv_kappa * inv_lambda;
-    scaled->inv_affine_damped = GS_R(1.0) / (GS_R(1.0) + scaled->kappa);
-    scaled->inv_affine_undamped = GS_R(1.0) / (GS_R(1.0) + scaled->kappa_spring);
-    scaled->law_force_conditioned = scaled->kappa < GS_R(1.0);
 }

@@ -8,6 +8,7 @@
 #define GS_MESH_H
 
 #include "gearsim/types.h"
+#include "gs_math.h"
 
 /* ---- Internal constants: what init derives and the step only reads. The
  * state lives in the public gs_block_state. Plain data, no pointers. */
@@ -184,17 +185,56 @@ static inline gs_real gs_mesh_friction_torque(const gs_mesh_friction_ *law, gs_r
     return GS_R(0.0);
 }
 
-/* Hard-stop contact (hard_stop.c). x: backlash position (m), u: relative
- * tooth velocity (m/s). */
+/* Hard-stop contact (hard_stop.c; the spring energy and the scaled
+ * constants inline here). x: backlash position (m), u: relative tooth
+ * velocity (m/s). */
 gs_real gs_contact_force(const gs_mesh_ *m, gs_real x, gs_real u, gs_real *f_spring);
-/* Energy stored in the contact spring at x (J). */
-gs_real gs_contact_energy(const gs_mesh_ *m, gs_real x);
+/* Energy stored in the contact spring at x (J); inline: every backlash step
+ * reports it. */
+static inline gs_real gs_contact_energy(const gs_mesh_ *m, gs_real x)
+{
+    gs_real delta = GS_R(0.0);
+    if (x > m->half_gap) {
+        delta = x - m->half_gap;
+    } else if (x < -m->half_gap) {
+        delta = -m->half_gap - x;
+    }
+    if (m->hard_stop == GS_HARD_STOP_SMOOTH) {
+        /* integral of S(s/d)*K*s ds: K*(3 s^4/(4 d^2) - 2 s^5/(5 d^3)) up to d, then linear spring */
+        const gs_real d = GS_R(1.0) / m->inv_transition;
+        const gs_real s = gs_min(delta, d);
+        const gs_real s2 = s * s;
+        const gs_real ramp = m->stiffness * s2 * s2 * m->inv_transition * m->inv_transition *
+                             (GS_R(0.75) - GS_R(0.4) * s * m->inv_transition);
+        if (delta > d) {
+            return ramp + GS_R(0.5) * m->stiffness * (delta * delta - d * d);
+        }
+        return ramp;
+    }
+    return GS_R(0.5) * m->stiffness * delta * delta;
+}
+
 /* The constants of gs_contact_solve for sub-step h (s) and the inverse
  * effective mass inv_mass (1/kg) at the pitch line. */
 void gs_contact_prepare(const gs_mesh_ *m, gs_real h, gs_real inv_mass, gs_contact_step_ *cs);
 /* The same constants with h/m_eff multiplied by lambda > 0 (the inverse mass
- * the contact sees scaled; rig_backlash.c). */
-void gs_contact_scale(const gs_contact_step_ *cs, gs_real lambda, gs_contact_step_ *scaled);
+ * the contact sees scaled; rig_backlash.c, per solve where the law is not
+ * fixed at init: inline). */
+static inline void gs_contact_scale(const gs_contact_step_ *cs, gs_real lambda, gs_contact_step_ *scaled)
+{
+    const gs_real inv_lambda = GS_R(1.0) / lambda;
+    *scaled = *cs;
+    scaled->c = cs->c * lambda;
+    scaled->inv_c = cs->inv_c * inv_lambda;
+    scaled->c_stiffness = cs->c_stiffness * lambda;
+    scaled->c_damping = cs->c_damping * lambda;
+    scaled->kappa = cs->kappa * lambda;
+    scaled->kappa_spring = cs->kappa_spring * lambda;
+    scaled->inv_kappa = cs->inv_kappa * inv_lambda;
+    scaled->inv_affine_damped = GS_R(1.0) / (GS_R(1.0) + scaled->kappa);
+    scaled->inv_affine_undamped = GS_R(1.0) / (GS_R(1.0) + scaled->kappa_spring);
+    scaled->law_force_conditioned = scaled->kappa < GS_R(1.0);
+}
 /* The backward-Euler contact over one sub-step: src/contact.h. */
 
 /* Thermal mass: explicit heat flow q_W, or an ambient path through

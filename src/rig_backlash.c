@@ -2,7 +2,7 @@
  * a torque-driven base) carry their own speeds; the contact is integrated by
  * backward Euler in a fixed number of sub-steps (contact.h), viscous terms
  * implicit, and the follower's friction (the load's, and the meshing loss
- * with its bounds taken from the last contact force) is solved with the
+ * with its bounds at the sub-step's own contact force) is solved with the
  * contact, set-valued at rest. */
 #include "rig_internal.h"
 #include "contact.h"
@@ -317,14 +317,16 @@ static substep_end substep_friction(const rig_consts_ *r, const gs_mesh_friction
     return e;
 }
 
-void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_mesh_friction_ *law,
-                          const gs_rig_input *in, gs_rig_output *out)
+/* The step's sub-steps. speed_driven and free_follower are constants in each
+ * of gs_rig_backlash_step's four calls, so that each inlined copy keeps only
+ * its own branches. */
+static GS_ALWAYS_INLINE void backlash_substeps(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx,
+                                               const gs_mesh_friction_ *law, const gs_rig_input *in, gs_rig_output *out,
+                                               const int speed_driven, const int free_follower, const int one)
 {
     const gs_mesh_ *m = &r->mesh;
-    const int n = r->substeps;
+    const int n = one ? 1 : r->substeps;
     const gs_real h = r->substep;
-    const int speed_driven = r->base_drive == GS_BASE_SPEED_DRIVEN;
-    const int free_follower = r->follower_free;
     const int law_per_substep = r->law_per_substep;
     gs_mesh_friction_ table_law; /* its law after the first sub-step */
     const gs_mesh_friction_ *law_sub = law;
@@ -392,8 +394,10 @@ void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
         sum_w_b += w_b;
         sum_w_f += w_f;
         sum_visc += m->mu_base * w_b * w_b + m->mu_follower * w_f * w_f;
-        sum_tau_mesh += tau_mesh;
-        sum_mesh += tau_mesh * w_f;
+        if (!free_follower) {
+            sum_tau_mesh += tau_mesh;
+            sum_mesh += tau_mesh * w_f;
+        }
     }
     st->block.backlash_position = c.x;
     st->block.contact_force = c.f;
@@ -415,4 +419,18 @@ void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
     out->port_power = (sum_fu + sum_mesh + sum_visc) * inv_n;
     out->contact_force = sum_f * inv_n;
     out->follower_acceleration = (w_f - w_f_start) * r->inv_dt;
+}
+
+void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_mesh_friction_ *law,
+                          const gs_rig_input *in, gs_rig_output *out)
+{
+    const int speed_driven = r->base_drive == GS_BASE_SPEED_DRIVEN;
+    if (!r->follower_free) {
+        backlash_substeps(r, st, ctx, law, in, out, speed_driven, 0, 0);
+    } else if (speed_driven && r->substeps == 1) {
+        /* the automatic count's usual choice at 1 kHz: the cheapest copy */
+        backlash_substeps(r, st, ctx, law, in, out, 1, 1, 1);
+    } else {
+        backlash_substeps(r, st, ctx, law, in, out, speed_driven, 1, 0);
+    }
 }

@@ -22,7 +22,7 @@
  *  - backlash: the follower (and a torque-driven base) carry their own
  *    speeds; the contact is integrated by backward Euler in a fixed number
  *    of sub-steps (contact.h), viscous terms implicit, the meshing loss's
- *    bounds taken from the last contact force.
+ *    bounds at the sub-step's own contact force.
  *
  * Friction where a shaft moves freely (the load's Coulomb friction and the
  * meshing loss, physics.md 11 "Lossy meshes hold") is one mechanism: backward
