@@ -58,7 +58,7 @@ import numpy as np
 #: The automatic contact sub-step count's target, gearsim.AUTO_H_OMEGA_N_MAX
 #: (GS_AUTO_H_OMEGA_N_MAX); this module does not import gearsim, and
 #: tests/python/test_bench_alternatives.py checks that both pick the same count.
-AUTO_H_OMEGA_N_MAX = 0.5
+AUTO_H_OMEGA_N_MAX = 1.0
 
 #: Shared parameters of the comparison (SI units). Simple Gear: teeth ratio
 #: g = 2, opposite rotation (s = -1), constant efficiency with the passive law,

@@ -56,7 +56,7 @@ extern "C" {
 /* The automatic sub-step count (contact_substeps = 0) is the smallest with
  * h*omega_n <= GS_AUTO_H_OMEGA_N_MAX, and stops at GS_AUTO_SUBSTEPS_MAX; see
  * gs_rig_info. */
-#define GS_AUTO_H_OMEGA_N_MAX 0.5
+#define GS_AUTO_H_OMEGA_N_MAX 1.0
 #define GS_AUTO_SUBSTEPS_MAX  16
 /* Harmonics of the torque ripple, per revolution and per tooth mesh. */
 #define GS_RIPPLE_HARMONICS   2
@@ -141,7 +141,7 @@ typedef struct {
                                    accuracy figure (0 without backlash); <= GS_AUTO_H_OMEGA_N_MAX is the
                                    automatic target, about 0.05 resolves a rebound */
     int substeps_capped;          /* 1 when contact_substeps = 0 chose GS_AUTO_SUBSTEPS_MAX
-                                   and h*omega_n is still above 0.5: the contact is
+                                   and h*omega_n is still above GS_AUTO_H_OMEGA_N_MAX: the contact is
                                    stable (backward Euler) but over-damped; lower dt or
                                    set contact_substeps */
     gs_real follower_per_base;    /* follower speed per base speed of the rigid mesh:

@@ -716,11 +716,13 @@ static void check_info(double stiffness, double follower_inertia, int substeps_p
 static void test_rig_info(void **state)
 {
     (void)state;
-    /* the smallest count with h*omega_n <= GS_AUTO_H_OMEGA_N_MAX (0.5), dt 1 ms:
-     * K 1e6, r_F 0.2 m, J_F 0.05: omega_n = 894.4 rad/s, n = 2 gives 0.447;
-     * K 4e6: omega_n = 1789 rad/s, n = 3 gives 0.596, n = 4 gives 0.447 */
-    check_info(1e6, 0.05, 0, 2, 0);
-    check_info(4e6, 0.05, 0, 4, 0);
+    /* the smallest count with h*omega_n <= GS_AUTO_H_OMEGA_N_MAX (1.0), dt 1 ms:
+     * K 1e6, r_F 0.2 m, J_F 0.05: omega_n = 894.4 rad/s, n = 1 gives 0.894;
+     * K 1.3e6: omega_n = 1019.8 rad/s, n = 1 gives 1.02, n = 2 gives 0.510;
+     * K 9e6: omega_n = 2683 rad/s, n = 2 gives 1.34, n = 3 gives 0.894 */
+    check_info(1e6, 0.05, 0, 1, 0);
+    check_info(1.3e6, 0.05, 0, 2, 0);
+    check_info(9e6, 0.05, 0, 3, 0);
     /* K 1e9, J_F 1e-4: omega_n = 6.32e5 rad/s; 16 sub-steps leave 39.5 */
     check_info(1e9, 1e-4, 0, GS_AUTO_SUBSTEPS_MAX, 1);
     /* the same, chosen by the user: no cap to report */

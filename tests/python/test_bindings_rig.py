@@ -429,15 +429,15 @@ def test_no_substep_warning_when_resolved_or_chosen():
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        # defaults: omega_n = sqrt(1e6 * 0.04 / 0.05) = 894 rad/s, 2 sub-steps give 0.447
+        # defaults: omega_n = sqrt(1e6 * 0.04 / 0.05) = 894 rad/s, 1 sub-step gives 0.894
         rig = gearsim.GearRig(backlash_enabled=True)
         # the same stiff rig with the count chosen by the user: nothing to report
         chosen = gearsim.GearRig(
             backlash_enabled=True, stiffness=1e9, follower_inertia=1e-4, contact_substeps=64
         )
         rigid = gearsim.GearRig()
-    assert rig.substeps == 2 and not rig.substeps_capped
-    assert rig.contact_h_omega_n == pytest.approx(0.5e-3 * (1e6 * 0.04 / 0.05) ** 0.5, rel=1e-9)
+    assert rig.substeps == 1 and not rig.substeps_capped
+    assert rig.contact_h_omega_n == pytest.approx(1e-3 * (1e6 * 0.04 / 0.05) ** 0.5, rel=1e-9)
     assert rig.contact_h_omega_n <= gearsim.AUTO_H_OMEGA_N_MAX
     assert chosen.substeps == 64 and not chosen.substeps_capped
     assert rigid.contact_h_omega_n == 0.0 and rigid.substeps == 1

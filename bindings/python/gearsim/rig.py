@@ -382,7 +382,7 @@ class Rig:
     @property
     def contact_h_omega_n(self) -> float:
         """h*omega_n of the backlash contact at the chosen sub-step (0 without
-        backlash): gearsim.AUTO_H_OMEGA_N_MAX (0.5) is the automatic target, about
+        backlash): gearsim.AUTO_H_OMEGA_N_MAX is the automatic target, about
         0.05 resolves a rebound."""
         return self._h_omega_n
 

@@ -74,10 +74,11 @@ __all__ = [
 
 #: h*omega_n of a backlash contact's sub-steps in the analysis: backward Euler
 #: damps a mode by about (h*omega_n)^2/2 per sub-step, so the rig's own
-#: automatic count (h*omega_n <= 0.5, stable but over-damped) would damp a
+#: automatic count (h*omega_n <= AUTO_H_OMEGA_N_MAX, stable but over-damped) would damp a
 #: mesh mode of a few percent of the sampling rate; the contact model of
 #: three external test records came within 1.07x of their noise floor at
-#: 0.03 and needed 1.3-1.6x at the automatic count (docs/analysis.md)
+#: 0.03 and needed 1.3-1.6x at the automatic count of h*omega_n <= 0.5
+#: (docs/analysis.md)
 CONTACT_H_OMEGA = 0.03
 
 
