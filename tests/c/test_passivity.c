@@ -582,8 +582,7 @@ static void print_coverage(const coverage *c)
                   c->substeps[0], c->substeps[1], c->substeps[2], c->substeps[3], c->substeps[4], c->substeps[5],
                   c->substeps[6], c->stribeck, c->ripple, c->heat_path, c->low_eta, c->regularised, c->speed_ramp,
                   c->mesh_spring, c->worst);
-    if (c->hashing)
-        print_message("  outputs hash (%s): 0x%016llX\n", PRECISION, (unsigned long long)c->outputs_hash);
+    if (c->hashing) print_message("  outputs hash (%s): 0x%016llX\n", PRECISION, (unsigned long long)c->outputs_hash);
 }
 
 /* The count of rigs: RIGS, or GEARSIM_PASSIVITY_RIGS (at least 20 000,
