@@ -317,15 +317,16 @@ static substep_end substep_friction(const rig_consts_ *r, const gs_mesh_friction
     return e;
 }
 
-/* The step's sub-steps. speed_driven and free_follower are constants in each
- * of gs_rig_backlash_step's four calls, so that each inlined copy keeps only
- * its own branches. */
+/* The step's sub-steps. gs_rig_backlash_step's three calls fix some of
+ * speed_driven, free_follower and one_substep (the count known to be 1) to
+ * constants, so that each inlined copy keeps only its own branches, and the
+ * one-sub-step copy no loop state (docs/performance.md, fourth round). */
 static GS_ALWAYS_INLINE void backlash_substeps(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx,
                                                const gs_mesh_friction_ *law, const gs_rig_input *in, gs_rig_output *out,
-                                               const int speed_driven, const int free_follower, const int one)
+                                               const int speed_driven, const int free_follower, const int one_substep)
 {
     const gs_mesh_ *m = &r->mesh;
-    const int n = one ? 1 : r->substeps;
+    const int n = one_substep ? 1 : r->substeps;
     const gs_real h = r->substep;
     const int law_per_substep = r->law_per_substep;
     gs_mesh_friction_ table_law; /* its law after the first sub-step */
