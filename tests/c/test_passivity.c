@@ -585,10 +585,10 @@ static void print_coverage(const coverage *c)
     if (c->hashing) print_message("  outputs hash (%s): 0x%016llX\n", PRECISION, (unsigned long long)c->outputs_hash);
 }
 
-/* The count of rigs: RIGS, or GEARSIM_PASSIVITY_RIGS (at least 20 000,
- * where the coverage asserts below hold). scripts/hardening.sh runs 20 000
- * under the sanitizers and valgrind, whose checks need the paths, not the
- * count, and would take minutes over 200 000. */
+/* The count of rigs: RIGS, or GEARSIM_PASSIVITY_RIGS (at least 5 000; the
+ * coverage asserts below scale with it). scripts/hardening.sh runs 20 000
+ * under the sanitizers and 5 000 under valgrind, whose checks need the
+ * paths, not the count, and would take minutes over 200 000. */
 static int rigs_to_search(void)
 {
     const char *text = getenv("GEARSIM_PASSIVITY_RIGS");
@@ -596,8 +596,8 @@ static int rigs_to_search(void)
     long n;
     if (text == NULL) return RIGS;
     n = strtol(text, &end, 10);
-    if (end == text || *end != '\0' || n < 20000 || n > 10000000)
-        fail_msg("GEARSIM_PASSIVITY_RIGS=%s: expected a count from 20000 to 10000000", text);
+    if (end == text || *end != '\0' || n < 5000 || n > 10000000)
+        fail_msg("GEARSIM_PASSIVITY_RIGS=%s: expected a count from 5000 to 10000000", text);
     return (int)n;
 }
 
@@ -632,10 +632,12 @@ static void test_random_rigs_create_no_energy(void **state)
                     failed_rigs, cov.rigs, cov.failed_by_mesh[0], cov.failed_by_mesh[1], cov.failed_by_mesh[2],
                     cov.failed_by_drive[0], cov.failed_by_drive[1]);
     assert_int_equal(failed_rigs, 0);
-    /* the search reaches what it claims to */
+    /* the search reaches what it claims to (about half the expected shares:
+     * compliant 1/8, backlash 1/2, no-pull off and lock on 1/4 each, 64
+     * sub-steps 1/14 of the rigs) */
     assert_true(cov.checked_exact > cov.steps / 3);
-    assert_true(cov.mesh[1] > 1000 && cov.mesh[2] > 5000);
-    assert_true(cov.no_pull[0] > 2000 && cov.lock[1] > 2000 && cov.substeps[6] > 500);
+    assert_true(cov.mesh[1] > rigs / 20 && cov.mesh[2] > rigs / 4);
+    assert_true(cov.no_pull[0] > rigs / 10 && cov.lock[1] > rigs / 10 && cov.substeps[6] > rigs / 40);
 }
 
 int main(void)
