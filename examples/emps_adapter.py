@@ -44,8 +44,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 #: names, else data/emps/DATA_EMPS.mat in the repository (ignored by git: the
 #: data's license is unstated, so gearsim does not distribute it).
 DATA_ENV = "GEARSIM_EMPS_DATA"
-REPO_DATA = os.path.normpath(os.path.join(HERE, "..", "data", "emps", "DATA_EMPS.mat"))
-WHERE = f"${DATA_ENV}, else data/emps/DATA_EMPS.mat"
+REPO_DATA_RELATIVE = os.path.join("data", "emps", "DATA_EMPS.mat")
+REPO_DATA = os.path.normpath(os.path.join(HERE, "..", REPO_DATA_RELATIVE))
+WHERE = f"${DATA_ENV}, else {REPO_DATA_RELATIVE}"
 
 
 def default_data_path() -> str:

@@ -15,6 +15,7 @@ import gearsim
 from gearsim.analysis import synthetic as S
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
+EXAMPLES = os.path.join(REPO, "examples")
 
 #: The effect names of the measurement format (docs/measurement-format.md
 #: section 3), written out here as the tests' own copy of the contract: the
@@ -146,7 +147,8 @@ def measurement(block: str, effects: tuple[str, ...], seed: int = 3, samples: in
 def emps_or_skip() -> str:
     """The EMPS data's path (examples/emps_adapter.py says where it is looked
     for), or skip with the reason."""
-    sys.path.insert(0, os.path.join(REPO, "examples"))
+    if EXAMPLES not in sys.path:
+        sys.path.insert(0, EXAMPLES)
     import emps_adapter
 
     path = emps_adapter.default_data_path()

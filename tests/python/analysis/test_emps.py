@@ -1,5 +1,5 @@
-"""Real data: the EMPS ball-screw axis (../shared/data/emps, not in the
-repository; skipped when absent). Starting from mass + viscous friction,
+"""Real data: the EMPS ball-screw axis (not in the repository: README, "Real
+data"; skipped when absent). Starting from mass + viscous friction,
 diagnose points at Coulomb friction, then at the offset, and the fitted mass,
 viscous and Coulomb coefficients land within 10 % of the published values.
 With the rig effects registered (sensor delay, Stribeck
@@ -11,15 +11,12 @@ predict the other half as well as the published model does."""
 
 from __future__ import annotations
 
-import os
-import sys
-
 import pytest
-from analysis_helpers import REPO, emps_or_skip
+from analysis_helpers import emps_or_skip
 
 from gearsim.analysis import diagnose, fit
 
-sys.path.insert(0, os.path.join(REPO, "examples"))
+# emps_or_skip puts examples/ on the path for the adapter
 
 
 @pytest.fixture(scope="module")
