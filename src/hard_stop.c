@@ -1,7 +1,8 @@
 /* hard_stop.c - the backlash contact laws (physics.md 4.3-4.5) and the
  * constants of the backward-Euler contact solve, which itself lives in
  * contact.h (the spring's energy and the scaled constants, used every step,
- * are inline in mesh.h). */
+ * are inline in mesh.h; the smooth law's rare bracketed solve is in
+ * rig_backlash.c, beside its caller). */
 #include "contact.h"
 
 /* Force and its derivative along u when x = x0 + h*u (dfdu = h*df/dx + df/dv). */

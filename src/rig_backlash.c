@@ -8,6 +8,101 @@
 #include "contact.h"
 #include "gs_math.h"
 
+/* The smooth law's bracketed solve (contact.h, smooth_root), here beside
+ * its only caller, the sub-step, so that the compiler sees which registers
+ * the call keeps. Decisions are taken on the penetration delta = p0 + h*v,
+ * values in the closing speed v. */
+GS_NOINLINE gs_real gs_smooth_root_bracketed(const gs_mesh_ *m, const gs_contact_step_ *cs, gs_real p0, gs_real v_free,
+                                             gs_real guess, gs_real *spring)
+{
+    const smooth_problem p = smooth_setup(m, cs, p0, v_free);
+    const gs_real to_t = cs->h_over_d;
+    const gs_real d = cs->transition;
+    const gs_real delta_free = p0 + cs->h * v_free;
+    const gs_real lambda = cs->c_damping * p0; /* h*Phi = delta - delta_free + kappa*delta - lambda, affine */
+    gs_real lo = -p0 * cs->inv_h;              /* the teeth just touching */
+    gs_real hi = v_free;
+    if (m->no_pull) {
+        if (cs->kappa * delta_free <= lambda) {
+            /* the clipped force is zero at the free motion's end */
+            *spring = spring_force(m, delta_free);
+            return v_free;
+        }
+        /* Below the speed where K*delta + D*v = 0 the clipped force is zero
+         * and Phi < 0: the root lies above it. Starting the bracket there
+         * keeps the kink of the clip out of Newton's way; on a stiff contact
+         * (kappa ~ 1e6) Newton stepped across it from the flat side and
+         * bisection did not close the bracket in 12 passes (fuzz finding). */
+        lo = gs_max(lo, -cs->c_stiffness * p0 * cs->inv_kappa);
+    } else {
+        /* the law pulls while the teeth separate: keep to one side of v = 0 */
+        const gs_real at_rest = residual_at_rest(m, cs, p0, v_free);
+        if (!(at_rest < GS_R(0.0) || at_rest > GS_R(0.0))) {
+            *spring = spring_force(m, p0);
+            return GS_R(0.0);
+        }
+        if (at_rest < GS_R(0.0)) {
+            lo = gs_max(lo, GS_R(0.0));
+        } else {
+            hi = GS_R(0.0);
+        }
+    }
+    /* closing speed at which the penetration reaches the transition depth d */
+    const gs_real v_full = (d - p0) * cs->inv_h;
+    if (hi > v_full) {
+        /* beyond d the law is affine: the root there if h*Phi(d) <= 0 */
+        if (lo >= v_full || d - delta_free + cs->kappa * d - lambda <= GS_R(0.0)) {
+            const gs_real v = gs_clamp((v_free - cs->c_stiffness * p0) * cs->inv_affine_damped, gs_max(v_full, lo), hi);
+            *spring = m->stiffness * (p0 + cs->h * v);
+            return v;
+        }
+        hi = v_full;
+    }
+    gs_real t_lo = lo * to_t + p.t0; /* psi(t_lo) <= 0 <= psi(t_hi), narrowed every pass */
+    gs_real t_hi = hi * to_t + p.t0;
+    gs_real t = guess * to_t + p.t0;
+    if (!(t > t_lo && t < t_hi)) {
+        t = GS_R(0.5) * (t_lo + t_hi);
+    }
+    /* NEWTON_ITERATIONS steps: an evaluation before each and after the last */
+    for (int i = 0; i <= NEWTON_ITERATIONS; ++i) {
+        const smooth_point x = smooth_at(&p, t);
+        if (x.psi > GS_R(0.0)) {
+            t_hi = t;
+        } else if (x.psi < GS_R(0.0)) {
+            t_lo = t;
+        }
+        int near;
+        if (smooth_accepts(&p, &x, &near)) {
+            return smooth_end(m, cs, &p, &x, spring);
+        }
+        if (i == NEWTON_ITERATIONS) {
+            continue; /* out of passes */
+        }
+        gs_real step;
+        const gs_real slope = smooth_step_from(&p, &x, near, &step);
+        t = GS_R(0.5) * (t_lo + t_hi);
+        /* the pulling law can make psi fall: bisect */
+        if (slope > GS_R(0.0) && x.t - step > t_lo && x.t - step < t_hi) {
+            t = x.t - step;
+        }
+    }
+    /* out of passes: the bracket end nearer v = 0, passive */
+    lo = (t_lo - p.t0) * cs->d_over_h;
+    hi = (t_hi - p.t0) * cs->d_over_h;
+    if (lo < GS_R(0.0) && hi > GS_R(0.0)) {
+        if (residual_at_rest(m, cs, p0, v_free) > GS_R(0.0)) {
+            hi = GS_R(0.0);
+        } else {
+            lo = GS_R(0.0);
+        }
+    }
+    const gs_real v = lo >= GS_R(0.0) ? lo : hi;
+    const gs_real delta = p0 + cs->h * v;
+    *spring = delta > GS_R(0.0) ? spring_force(m, delta) : GS_R(0.0);
+    return v;
+}
+
 /* The contact's state inside a step: kept in locals over the sub-steps. */
 typedef struct {
     gs_real x;  /* backlash position, m */
@@ -408,7 +503,7 @@ static GS_ALWAYS_INLINE void backlash_substeps(const rig_consts_ *r, gs_rig_stat
     st->follower_speed = w_f;
     st->base_angle = theta_b;
     st->follower_position = x_f;
-    const gs_real inv_n = r->inv_substeps;
+    const gs_real inv_n = one_substep ? GS_R(1.0) : r->inv_substeps; /* x*1 is x: the same bits */
     out->base_port_torque = (m->base_radius * sum_f + m->mu_base * sum_w_b) * inv_n;
     out->base_torque = speed_driven ? out->base_port_torque + r->base_inertia * st->base_acceleration : in->base_torque;
     if (r->ripple && speed_driven) {

@@ -352,8 +352,13 @@ static contact_geom contact_of(const rig_case *c, const gs_rig_info *info)
     return g;
 }
 
-/* The contact solve's own accuracy (docs/model.md): its Newton stops at
- * 1e-13 (float 1e-6) of the pitch-line speed scale; ten times that. */
+/* The rounding of the contact solve's force. Its closed forms (the full
+ * laws, the affine piece) end on the root to rounding, and the smooth law's
+ * Halley iteration ends only on points whose force is passive (docs/model.md),
+ * so its tolerance (1e-7 of the force) creates no energy: what is left is
+ * the rounding of the impulse-balance force, which carries (1 + kappa)/c
+ * times the pitch-line speed scale's. 1e-12 (float 1e-5): about 4500 (84)
+ * rounding units of that. */
 #ifdef GS_SINGLE_PRECISION
 #define SOLVER_TOLERANCE 1e-5
 #else
