@@ -1,15 +1,18 @@
 /* table.h - clamped linear interpolation (internal). Breakpoints are
  * validated strictly increasing at init, so the step only searches. Inline:
- * the step path calls these once or twice per (sub-)step. */
+ * the step path calls these once or twice per (sub-)step; the bracket
+ * always, as GCC at -Os kept it out of line (a call and its spills: 35
+ * instructions of a 2-D table step on the Cortex-M4F). */
 #ifndef GS_TABLE_H
 #define GS_TABLE_H
 
 #include "gearsim/types.h"
+#include "gs_math.h"
 
 /* The bracket of `at`: y(at) = y[lo] + w*(y[hi] - y[lo]), or y[lo] with
  * lo == hi (w = 0) where `at` is clamped to an end. Cost: O(n), n <=
  * GS_TABLE_MAX. */
-static inline void gs_interp_bracket(const gs_real *x, int n, gs_real at, int *lo, int *hi, gs_real *w)
+static GS_ALWAYS_INLINE void gs_interp_bracket(const gs_real *x, int n, gs_real at, int *lo, int *hi, gs_real *w)
 {
     *w = GS_R(0.0);
     if (!(at > x[0])) {
