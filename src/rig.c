@@ -9,6 +9,7 @@
 #include "rig_geared.h"
 #include "blocks.h"
 #include "gs_math.h"
+#include "mesh_law.h"
 #include "validate.h"
 
 GS_CONSTS_REALS_CHECK_(GS_RIG_CONSTS_REALS, rig_consts_);
@@ -438,7 +439,7 @@ void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *st, const gs_rig_inp
     gs_loss_ctx_ ctx_now;
     const gs_loss_ctx_ *ctx = &r->loss_ctx;
     if (!r->loss_static) {
-        gs_mesh_loss_prepare(m, from_input ? in->measured_temperature : st->block.temperature, &ctx_now);
+        gs_mesh_loss_prepare_inline(m, from_input ? in->measured_temperature : st->block.temperature, &ctx_now);
         ctx = &ctx_now;
     }
     out->contact_force = GS_R(0.0);
@@ -447,7 +448,7 @@ void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *st, const gs_rig_inp
         const gs_mesh_friction_ *law = &r->loss_law;
         gs_mesh_friction_ law_now;
         if (!r->loss_static) {
-            gs_mesh_friction_law(m, ctx, st->block.follower_torque, &law_now);
+            gs_mesh_friction_law_inline(m, ctx, st->block.follower_torque, &law_now);
             law = &law_now;
         }
         if (m->backlash) {
