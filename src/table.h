@@ -23,8 +23,8 @@ static GS_ALWAYS_INLINE void gs_interp_bracket(const gs_real *x, int n, gs_real 
         *lo = *hi = n - 1;
         return;
     }
-    int i = 1;
-    while (i < n - 1 && !(at < x[i])) {
+    int i = 1; /* x[0] < at < x[n - 1]: the search stops by n - 1 */
+    while (!(at < x[i])) {
         ++i;
     }
     *lo = i - 1;
