@@ -190,8 +190,10 @@ static inline gs_real gs_mesh_friction_torque(const gs_mesh_friction_ *law, gs_r
  * velocity (m/s). */
 gs_real gs_contact_force(const gs_mesh_ *m, gs_real x, gs_real u, gs_real *f_spring);
 /* Energy stored in the contact spring at x (J); inline: every backlash step
- * reports it. */
-static inline gs_real gs_contact_energy(const gs_mesh_ *m, gs_real x)
+ * reports it. d is the smooth law's transition depth (gs_contact_step_'s
+ * transition, 1/inv_transition, kept by init so that the step does not
+ * divide). */
+static inline gs_real gs_contact_energy(const gs_mesh_ *m, gs_real d, gs_real x)
 {
     gs_real delta = GS_R(0.0);
     if (x > m->half_gap) {
@@ -201,7 +203,6 @@ static inline gs_real gs_contact_energy(const gs_mesh_ *m, gs_real x)
     }
     if (m->hard_stop == GS_HARD_STOP_SMOOTH) {
         /* integral of S(s/d)*K*s ds: K*(3 s^4/(4 d^2) - 2 s^5/(5 d^3)) up to d, then linear spring */
-        const gs_real d = GS_R(1.0) / m->inv_transition;
         const gs_real s = gs_min(delta, d);
         const gs_real s2 = s * s;
         const gs_real ramp = m->stiffness * s2 * s2 * m->inv_transition * m->inv_transition *
@@ -237,18 +238,23 @@ static inline void gs_contact_scale(const gs_contact_step_ *cs, gs_real lambda, 
 }
 /* The backward-Euler contact over one sub-step: src/contact.h. */
 
-/* Thermal mass: explicit heat flow q_W, or an ambient path through
- * conductance g_W_K treated implicitly (stable for any thermal mass). */
-static inline void gs_mesh_thermal_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, gs_real loss_W, gs_real q_W,
-                                        gs_real ambient_K, gs_real conductance_W_K)
+/* Thermal mass: C dT/dt = P + G (T_amb - T), the heat P (losses and any
+ * explicit heat flow) explicit, the ambient path through conductance G
+ * implicit (stable for any thermal mass). Over a step dt:
+ *   T' = (T + a*(P + G*T_amb)) / (1 + a*G),  a = dt/C.
+ * gain (a) and den (1 + a*G) are the step's constants: the rig fixes them at
+ * init, the block step derives them from its dt. */
+static inline void gs_mesh_thermal_constants(const gs_mesh_ *m, gs_real dt, gs_real conductance_W_K, gs_real *gain_K_W,
+                                             gs_real *den)
 {
-    if (!m->thermal_enabled) {
-        return;
-    }
-    /* C dT/dt = P + q + G (T_amb - T): the ambient term implicit, the rest explicit. */
-    const gs_real a = dt / m->thermal_mass;
-    st->temperature =
-        (st->temperature + a * (loss_W + q_W + conductance_W_K * ambient_K)) / (GS_R(1.0) + a * conductance_W_K);
+    *gain_K_W = m->thermal_enabled ? dt / m->thermal_mass : GS_R(0.0);
+    *den = GS_R(1.0) + *gain_K_W * conductance_W_K;
+}
+
+static inline void gs_mesh_thermal_step(gs_block_state *st, gs_real gain_K_W, gs_real den, gs_real heat_W,
+                                        gs_real ambient_flow_W)
+{
+    st->temperature = (st->temperature + gain_K_W * (heat_W + ambient_flow_W)) / den;
 }
 
 /* Block-level step shared by both blocks: rigid (form A) or backlash (form C). */

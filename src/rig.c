@@ -320,6 +320,7 @@ static void rig_fill(rig_consts_ *r, const gs_rig_params *p)
     r->speed_ramp = p->base_speed_ramp != 0;
     r->load_offset = p->load_offset;
     r->inv_thermal_resistance = p->heat_path ? GS_R(1.0) / p->thermal_resistance_K_W : GS_R(0.0);
+    gs_mesh_thermal_constants(&r->mesh, r->dt, r->inv_thermal_resistance, &r->thermal_gain, &r->thermal_den);
     r->temperature_source = p->temperature_source;
     r->accel_gain = p->dt_s / (p->accel_filter_time_constant_s + p->dt_s);
     r->inv_dt = GS_R(1.0) / p->dt_s;
@@ -471,15 +472,16 @@ void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *st, const gs_rig_inp
     }
     if (from_input) {
         st->block.temperature = in->measured_temperature;
-    } else {
-        gs_mesh_thermal_step(m, &st->block, r->dt, out->loss_power, GS_R(0.0), in->ambient_temperature,
-                             r->inv_thermal_resistance);
+    } else if (m->thermal_enabled) {
+        gs_mesh_thermal_step(&st->block, r->thermal_gain, r->thermal_den, out->loss_power,
+                             r->inv_thermal_resistance * in->ambient_temperature);
     }
     out->base_speed = st->base_speed;
     out->base_angle = st->base_angle;
     out->follower_speed = st->follower_speed;
     out->follower_position = st->follower_position;
-    out->contact_energy = m->backlash ? gs_contact_energy(m, st->block.backlash_position) : GS_R(0.0);
+    out->contact_energy =
+        m->backlash ? gs_contact_energy(m, r->contact.transition, st->block.backlash_position) : GS_R(0.0);
     out->temperature = st->block.temperature;
     out->backlash_position = st->block.backlash_position;
 }

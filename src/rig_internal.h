@@ -73,8 +73,10 @@ typedef struct {
     int speed_ramp;           /* speed-driven rigid rig: torques at the step's mean speed */
     gs_real load_offset;
     gs_real inv_thermal_resistance;
-    gs_real accel_gain; /* dt/(tau + dt) */
-    gs_real inv_dt;     /* 1/dt */
+    gs_real thermal_gain; /* dt/C over the step, K/W (gs_mesh_thermal_constants) */
+    gs_real thermal_den;  /* 1 + thermal_gain/R: the ambient path's implicit term */
+    gs_real accel_gain;   /* dt/(tau + dt) */
+    gs_real inv_dt;       /* 1/dt */
     /* the geared solve's masses (rigid mesh with a free base gear: a torque-driven
      * base over dt, or the compliant shaft's base gear over its sub-step h),
      * viscous terms implicit: the base with mu_B (+ g/2 of the shaft's midpoint

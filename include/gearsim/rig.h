@@ -123,9 +123,9 @@ GS_API extern const gs_field_info gs_rig_state_info[GS_RIG_STATE_FIELDS];
  * stale count, and the compiler's message gives the value to write here
  * (src/mesh.h, GS_CONSTS_REALS_CHECK_). */
 #ifdef GS_SINGLE_PRECISION
-#define GS_RIG_CONSTS_REALS 287
+#define GS_RIG_CONSTS_REALS 289
 #else
-#define GS_RIG_CONSTS_REALS 276
+#define GS_RIG_CONSTS_REALS 278
 #endif
 typedef struct {
     gs_real opaque_[GS_RIG_CONSTS_REALS];
