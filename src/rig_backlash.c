@@ -368,9 +368,12 @@ static substep_end substep_with_friction(const rig_consts_ *r, const follower_fr
  * them. Returns the sub-step's end and the meshing loss that acted
  * (*tau_mesh, against the follower's motion), and sets *t_f, the net
  * follower torque T_F of the law on that force (the base load of the 2-D
- * table: T_F0 at rest). */
-static substep_end substep_friction(const rig_consts_ *r, const gs_mesh_friction_ *law, contact_state *c, gs_real w_f,
-                                    gs_real w_b_free, gs_real momentum, gs_real *tau_mesh, gs_real *t_f)
+ * table: T_F0 at rest). Inline into each copy of the sub-steps that has
+ * friction; the stages it calls (substep_with_friction) stay one copy, out of
+ * line. */
+static GS_ALWAYS_INLINE substep_end substep_friction(const rig_consts_ *r, const gs_mesh_friction_ *law,
+                                                     contact_state *c, gs_real w_f, gs_real w_b_free, gs_real momentum,
+                                                     gs_real *tau_mesh, gs_real *t_f)
 {
     /* Regularised, the load's friction bound is the smooth law at the
      * sub-step's start speed, F(v)*|tanh(4 v/v_th)|: zero at rest, so the
@@ -412,10 +415,11 @@ static substep_end substep_friction(const rig_consts_ *r, const gs_mesh_friction
     return e;
 }
 
-/* The step's sub-steps. gs_rig_backlash_step's three calls fix some of
+/* The step's sub-steps. gs_rig_backlash_step's four calls fix some of
  * speed_driven, free_follower and one_substep (the count known to be 1) to
  * constants, so that each inlined copy keeps only its own branches, and the
- * one-sub-step copy no loop state (docs/performance.md, fourth round). */
+ * one-sub-step copies no loop state (docs/performance.md, fourth and sixth
+ * rounds). */
 static GS_ALWAYS_INLINE void backlash_substeps(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx,
                                                const gs_mesh_friction_ *law, const gs_rig_input *in, gs_rig_output *out,
                                                const int speed_driven, const int free_follower, const int one_substep)
@@ -522,7 +526,12 @@ void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
 {
     const int speed_driven = r->base_drive == GS_BASE_SPEED_DRIVEN;
     if (!r->follower_free) {
-        backlash_substeps(r, st, ctx, law, in, out, speed_driven, 0, 0);
+        if (speed_driven && r->substeps == 1) {
+            /* the same usual choice with friction on the follower */
+            backlash_substeps(r, st, ctx, law, in, out, 1, 0, 1);
+        } else {
+            backlash_substeps(r, st, ctx, law, in, out, speed_driven, 0, 0);
+        }
     } else if (speed_driven && r->substeps == 1) {
         /* the automatic count's usual choice at 1 kHz: the cheapest copy */
         backlash_substeps(r, st, ctx, law, in, out, 1, 1, 1);
