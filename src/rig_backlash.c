@@ -214,9 +214,9 @@ static inline gs_real bound_value(const friction_bound *b, gs_real sigma, gs_rea
  * drives: the force alternated about the consistent one with a gain of up to
  * q_fd, and an efficiency of 0.5 or less on locked teeth, 0.15 on the full
  * laws, settled on wrong torques or never.) */
-static inline substep_end contact_against(const rig_consts_ *r, contact_state *c, gs_real w_b_free, gs_real momentum,
-                                          gs_real sigma, const friction_bound *b, gs_real lever_f_guess,
-                                          gs_real *friction)
+static GS_ALWAYS_INLINE substep_end contact_against(const rig_consts_ *r, contact_state *c, gs_real w_b_free,
+                                                    gs_real momentum, gs_real sigma, const friction_bound *b,
+                                                    gs_real lever_f_guess, gs_real *friction)
 {
     const gs_real lambda = GS_R(1.0) + r->bound_gain * b->q;
     if (!(b->q > GS_R(0.0) || b->q < GS_R(0.0)) || !(lambda > GS_R(0.0))) {
@@ -228,10 +228,11 @@ static inline substep_end contact_against(const rig_consts_ *r, contact_state *c
     }
     const gs_real w_f_free = (momentum - r->substep * sigma * b->constant) * r->inv_driven_inertia_sub;
     gs_contact_step_ scaled;
-    const gs_contact_step_ *cs = b->follower_drives ? &r->contact_fd : &r->contact_bd;
-    if (!r->friction_contacts_fixed) {
+    const gs_contact_step_ *cs = &scaled;
+    if (r->friction_contacts_fixed) { /* each branch's constants, scaled at init */
+        cs = b->follower_drives ? &r->contact_fd : &r->contact_bd;
+    } else {
         gs_contact_scale(&r->contact, lambda, &scaled);
-        cs = &scaled;
     }
     substep_end e;
     const gs_real u_free = r->mesh.base_radius * w_b_free - r->follower_lever * w_f_free;
@@ -240,6 +241,16 @@ static inline substep_end contact_against(const rig_consts_ *r, contact_state *c
     e.w_b = w_b_free - r->base_kick * e.f;
     *friction = -sigma * bound_value(b, sigma, r->follower_lever * e.f);
     return e;
+}
+
+/* contact_against for the rare branch changes (slide_other_branch): one
+ * out-of-line copy, so that slide()'s inline one is the only solve on the
+ * usual path (docs/performance.md, sixth round). */
+static GS_NOINLINE substep_end contact_against_out_of_line(const rig_consts_ *r, contact_state *c, gs_real w_b_free,
+                                                           gs_real momentum, gs_real sigma, const friction_bound *b,
+                                                           gs_real lever_f_guess, gs_real *friction)
+{
+    return contact_against(r, c, w_b_free, momentum, sigma, b, lever_f_guess, friction);
 }
 
 /* slide() where the first branch was not consistent with its own force: the
@@ -252,7 +263,7 @@ static substep_end slide_other_branch(const rig_consts_ *r, const follower_frict
     const int locked = c->locked;
     friction_bound b = bound_branch(fr, !first_drives);
     if (!b.unbounded) {
-        const substep_end e = contact_against(r, c, w_b_free, momentum, sigma, &b, lever_f_guess, friction);
+        const substep_end e = contact_against_out_of_line(r, c, w_b_free, momentum, sigma, &b, lever_f_guess, friction);
         if (follower_drives_at(fr, sigma, r->follower_lever * e.f) == b.follower_drives) {
             return e;
         }
@@ -260,7 +271,7 @@ static substep_end slide_other_branch(const rig_consts_ *r, const follower_frict
     }
     b.constant = fr->level + fr->law->c0;
     b.q = GS_R(0.0);
-    return contact_against(r, c, w_b_free, momentum, sigma, &b, lever_f_guess, friction);
+    return contact_against_out_of_line(r, c, w_b_free, momentum, sigma, &b, lever_f_guess, friction);
 }
 
 /* Sliding the way sigma, the law on its branch at the force lever_f_guess
@@ -270,18 +281,15 @@ static substep_end slide_other_branch(const rig_consts_ *r, const follower_frict
 static inline int slide(const rig_consts_ *r, const follower_friction *fr, contact_state *c, gs_real w_b_free,
                         gs_real momentum, gs_real sigma, gs_real lever_f_guess, substep_end *e, gs_real *friction)
 {
-    if (!fr->law->lossy) { /* the load's friction alone: a constant bound */
-        const friction_bound level = {fr->level, GS_R(0.0), 0, 0};
-        *e = contact_against(r, c, w_b_free, momentum, sigma, &level, lever_f_guess, friction);
-        return 1;
-    }
     const int locked = c->locked;
+    /* without a meshing loss the bound is the load's friction alone, a
+     * constant with no branches to check */
     const friction_bound b = bound_at(fr, sigma, lever_f_guess);
     if (b.unbounded) {
         return 0;
     }
     *e = contact_against(r, c, w_b_free, momentum, sigma, &b, lever_f_guess, friction);
-    if (follower_drives_at(fr, sigma, r->follower_lever * e->f) == b.follower_drives) {
+    if (!fr->law->lossy || follower_drives_at(fr, sigma, r->follower_lever * e->f) == b.follower_drives) {
         return 1;
     }
     c->locked = locked;
