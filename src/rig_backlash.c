@@ -243,12 +243,13 @@ static GS_ALWAYS_INLINE substep_end contact_against(const rig_consts_ *r, contac
     return e;
 }
 
-/* contact_against for the rare branch changes (slide_other_branch): one
- * out-of-line copy, so that slide()'s inline one is the only solve on the
- * usual path (docs/performance.md, sixth round). */
-static GS_NOINLINE substep_end contact_against_out_of_line(const rig_consts_ *r, contact_state *c, gs_real w_b_free,
-                                                           gs_real momentum, gs_real sigma, const friction_bound *b,
-                                                           gs_real lever_f_guess, gs_real *friction)
+/* contact_against where the compiler decides: the generic sub-steps and the
+ * rare branch changes (slide_other_branch) share it, and GCC keeps it out of
+ * line, one copy. (Forced out of line, GS_NOINLINE, it cost the torque-driven
+ * backlash scenarios 20 % at -O2: docs/performance.md, sixth round.) */
+static inline substep_end contact_against_shared(const rig_consts_ *r, contact_state *c, gs_real w_b_free,
+                                                 gs_real momentum, gs_real sigma, const friction_bound *b,
+                                                 gs_real lever_f_guess, gs_real *friction)
 {
     return contact_against(r, c, w_b_free, momentum, sigma, b, lever_f_guess, friction);
 }
@@ -263,7 +264,7 @@ static substep_end slide_other_branch(const rig_consts_ *r, const follower_frict
     const int locked = c->locked;
     friction_bound b = bound_branch(fr, !first_drives);
     if (!b.unbounded) {
-        const substep_end e = contact_against_out_of_line(r, c, w_b_free, momentum, sigma, &b, lever_f_guess, friction);
+        const substep_end e = contact_against_shared(r, c, w_b_free, momentum, sigma, &b, lever_f_guess, friction);
         if (follower_drives_at(fr, sigma, r->follower_lever * e.f) == b.follower_drives) {
             return e;
         }
@@ -271,16 +272,26 @@ static substep_end slide_other_branch(const rig_consts_ *r, const follower_frict
     }
     b.constant = fr->level + fr->law->c0;
     b.q = GS_R(0.0);
-    return contact_against_out_of_line(r, c, w_b_free, momentum, sigma, &b, lever_f_guess, friction);
+    return contact_against_shared(r, c, w_b_free, momentum, sigma, &b, lever_f_guess, friction);
 }
 
 /* Sliding the way sigma, the law on its branch at the force lever_f_guess
  * first (slide_other_branch where that is not consistent). *friction is the
  * friction torque on the follower. Returns 0 (no solve) where the mesh
- * self-locks that way at the guess. */
-static inline int slide(const rig_consts_ *r, const follower_friction *fr, contact_state *c, gs_real w_b_free,
-                        gs_real momentum, gs_real sigma, gs_real lever_f_guess, substep_end *e, gs_real *friction)
+ * self-locks that way at the guess. inline_solve (the one-sub-step copy):
+ * the first solve inline, one for either bound; otherwise the shared copy. */
+static GS_ALWAYS_INLINE int slide(const rig_consts_ *r, const follower_friction *fr, contact_state *c, gs_real w_b_free,
+                                  gs_real momentum, gs_real sigma, gs_real lever_f_guess, substep_end *e,
+                                  gs_real *friction, const int inline_solve)
 {
+    if (!inline_solve && !fr->law->lossy) {
+        /* the load's friction alone, a constant bound, in a call of its own
+         * (one call for both bounds made GCC's -O2 code for the generic
+         * sub-steps 25 % slower on the torque-driven full-law scenario) */
+        const friction_bound level = {fr->level, GS_R(0.0), 0, 0};
+        *e = contact_against_shared(r, c, w_b_free, momentum, sigma, &level, lever_f_guess, friction);
+        return 1;
+    }
     const int locked = c->locked;
     /* without a meshing loss the bound is the load's friction alone, a
      * constant with no branches to check */
@@ -288,7 +299,8 @@ static inline int slide(const rig_consts_ *r, const follower_friction *fr, conta
     if (b.unbounded) {
         return 0;
     }
-    *e = contact_against(r, c, w_b_free, momentum, sigma, &b, lever_f_guess, friction);
+    *e = inline_solve ? contact_against(r, c, w_b_free, momentum, sigma, &b, lever_f_guess, friction)
+                      : contact_against_shared(r, c, w_b_free, momentum, sigma, &b, lever_f_guess, friction);
     if (!fr->law->lossy || follower_drives_at(fr, sigma, r->follower_lever * e->f) == b.follower_drives) {
         return 1;
     }
@@ -313,9 +325,10 @@ static inline int slide(const rig_consts_ *r, const follower_friction *fr, conta
  * torque on the follower. */
 typedef enum { STAGE_SLIDE_ON, STAGE_STUCK, STAGE_AGAINST_PUSH, STAGE_AGAINST_LOCKED, STAGE_NONE } friction_stage;
 
-static substep_end substep_with_friction(const rig_consts_ *r, const follower_friction *fr, contact_state *c,
-                                         gs_real w_f, gs_real w_b_free, gs_real momentum, gs_real *friction,
-                                         friction_mode *mode)
+static GS_ALWAYS_INLINE substep_end substep_with_friction(const rig_consts_ *r, const follower_friction *fr,
+                                                          contact_state *c, gs_real w_f, gs_real w_b_free,
+                                                          gs_real momentum, gs_real *friction, friction_mode *mode,
+                                                          const int inline_solve)
 {
     const int locked = c->locked;
     gs_real guess = r->follower_lever * c->f; /* the force that picks the law's branch */
@@ -349,7 +362,7 @@ static substep_end substep_with_friction(const rig_consts_ *r, const follower_fr
             *mode = FRICTION_NONE;
             return contact_moving(r, c, w_b_free, momentum * r->inv_driven_inertia_sub);
         }
-        if (!slide(r, fr, c, w_b_free, momentum, sigma, guess, &e, friction)) {
+        if (!slide(r, fr, c, w_b_free, momentum, sigma, guess, &e, friction, inline_solve)) {
             stage = stage == STAGE_SLIDE_ON ? STAGE_STUCK : STAGE_NONE;
             continue;
         }
@@ -376,12 +389,11 @@ static substep_end substep_with_friction(const rig_consts_ *r, const follower_fr
  * them. Returns the sub-step's end and the meshing loss that acted
  * (*tau_mesh, against the follower's motion), and sets *t_f, the net
  * follower torque T_F of the law on that force (the base load of the 2-D
- * table: T_F0 at rest). Inline into each copy of the sub-steps that has
- * friction; the stages it calls (substep_with_friction) stay one copy, out of
- * line. */
+ * table: T_F0 at rest). Inline, with its stages, into each copy of the
+ * sub-steps that has friction (inline_solve: slide()). */
 static GS_ALWAYS_INLINE substep_end substep_friction(const rig_consts_ *r, const gs_mesh_friction_ *law,
                                                      contact_state *c, gs_real w_f, gs_real w_b_free, gs_real momentum,
-                                                     gs_real *tau_mesh, gs_real *t_f)
+                                                     gs_real *tau_mesh, gs_real *t_f, const int inline_solve)
 {
     /* Regularised, the load's friction bound is the smooth law at the
      * sub-step's start speed, F(v)*|tanh(4 v/v_th)|: zero at rest, so the
@@ -395,7 +407,7 @@ static GS_ALWAYS_INLINE substep_end substep_friction(const rig_consts_ *r, const
     friction_mode mode = FRICTION_NONE;
     substep_end e;
     if (law->lossy || fr.level > GS_R(0.0) || fr.level < GS_R(0.0)) {
-        e = substep_with_friction(r, &fr, c, w_f, w_b_free, momentum, &friction, &mode);
+        e = substep_with_friction(r, &fr, c, w_f, w_b_free, momentum, &friction, &mode, inline_solve);
     } else {
         e = contact_moving(r, c, w_b_free, momentum * r->inv_driven_inertia_sub);
     }
@@ -477,7 +489,7 @@ static GS_ALWAYS_INLINE void backlash_substeps(const rig_consts_ *r, gs_rig_stat
             }
             gs_mesh_friction_ law_now;
             const gs_mesh_friction_ *law_k = gs_rig_step_law(r, law_sub, t_f, w_f, &law_now);
-            e = substep_friction(r, law_k, &c, w_f, w_b_free, momentum, &tau_mesh, &t_f);
+            e = substep_friction(r, law_k, &c, w_f, w_b_free, momentum, &tau_mesh, &t_f, one_substep);
         }
         /* x moves with the relative speed the contact was solved for: the end
          * speeds give it back only to rounding, and that rounding times the
@@ -529,6 +541,19 @@ static GS_ALWAYS_INLINE void backlash_substeps(const rig_consts_ *r, gs_rig_stat
     out->follower_acceleration = (w_f - w_f_start) * r->inv_dt;
 }
 
+/* The speed-driven friction path at one sub-step, in a function of its own:
+ * its friction stages and its first solve inline (inline_solve), while the
+ * generic copy in gs_rig_backlash_step keeps the compiler's choices. (In one
+ * function, the two copies made GCC move the friction stages out of line:
+ * the generic copy then cost 12-19 % more on the torque-driven backlash
+ * scenarios.) */
+static GS_NOINLINE void backlash_one_substep_friction(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx,
+                                                      const gs_mesh_friction_ *law, const gs_rig_input *in,
+                                                      gs_rig_output *out)
+{
+    backlash_substeps(r, st, ctx, law, in, out, 1, 0, 1);
+}
+
 void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_mesh_friction_ *law,
                           const gs_rig_input *in, gs_rig_output *out)
 {
@@ -536,7 +561,7 @@ void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
     if (!r->follower_free) {
         if (speed_driven && r->substeps == 1) {
             /* the same usual choice with friction on the follower */
-            backlash_substeps(r, st, ctx, law, in, out, 1, 0, 1);
+            backlash_one_substep_friction(r, st, ctx, law, in, out);
         } else {
             backlash_substeps(r, st, ctx, law, in, out, speed_driven, 0, 0);
         }
