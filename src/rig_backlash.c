@@ -435,9 +435,10 @@ static GS_ALWAYS_INLINE substep_end substep_friction(const rig_consts_ *r, const
     return e;
 }
 
-/* The step's sub-steps. gs_rig_backlash_step's four calls fix some of
- * speed_driven, free_follower and one_substep (the count known to be 1) to
- * constants, so that each inlined copy keeps only its own branches, and the
+/* The step's sub-steps. Its four copies (two free-follower ones inline in
+ * gs_rig_backlash_step, two friction ones in functions of their own) fix
+ * some of speed_driven, free_follower and one_substep (the count known to be
+ * 1) to constants, so that each keeps only its own branches, and the
  * one-sub-step copies no loop state (docs/performance.md, fourth and sixth
  * rounds). */
 static GS_ALWAYS_INLINE void backlash_substeps(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx,
@@ -543,15 +544,25 @@ static GS_ALWAYS_INLINE void backlash_substeps(const rig_consts_ *r, gs_rig_stat
 
 /* The speed-driven friction path at one sub-step, in a function of its own:
  * its friction stages and its first solve inline (inline_solve), while the
- * generic copy in gs_rig_backlash_step keeps the compiler's choices. (In one
- * function, the two copies made GCC move the friction stages out of line:
- * the generic copy then cost 12-19 % more on the torque-driven backlash
- * scenarios.) */
+ * generic copy (below) keeps the compiler's choices. (In one function, the
+ * two copies made GCC move the friction stages out of line: the generic
+ * copy then cost 12-19 % more on the torque-driven backlash scenarios.) */
 static GS_NOINLINE void backlash_one_substep_friction(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx,
                                                       const gs_mesh_friction_ *law, const gs_rig_input *in,
                                                       gs_rig_output *out)
 {
     backlash_substeps(r, st, ctx, law, in, out, 1, 0, 1);
+}
+
+/* The generic friction copy (a torque-driven base, or several sub-steps),
+ * also a function of its own: gs_rig_backlash_step's frame, held below
+ * either friction copy, is then only the free copies' (the step's
+ * worst-case stack on the Cortex-M4F: 1136 -> 968 B at -Os). */
+static GS_NOINLINE void backlash_friction_substeps(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx,
+                                                   const gs_mesh_friction_ *law, const gs_rig_input *in,
+                                                   gs_rig_output *out, const int speed_driven)
+{
+    backlash_substeps(r, st, ctx, law, in, out, speed_driven, 0, 0);
 }
 
 void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_ctx_ *ctx, const gs_mesh_friction_ *law,
@@ -563,7 +574,7 @@ void gs_rig_backlash_step(const rig_consts_ *r, gs_rig_state *st, const gs_loss_
             /* the same usual choice with friction on the follower */
             backlash_one_substep_friction(r, st, ctx, law, in, out);
         } else {
-            backlash_substeps(r, st, ctx, law, in, out, speed_driven, 0, 0);
+            backlash_friction_substeps(r, st, ctx, law, in, out, speed_driven);
         }
     } else if (speed_driven && r->substeps == 1) {
         /* the automatic count's usual choice at 1 kHz: the cheapest copy */
