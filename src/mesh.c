@@ -137,6 +137,8 @@ void gs_mesh_block_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, const
         gs_real den;
         gs_mesh_thermal_constants(m, dt, GS_R(0.0), &gain_K_W, &den); /* no ambient path */
         gs_mesh_thermal_step(st, gain_K_W, den, p_loss + in->heat_flow, GS_R(0.0));
+    } else {
+        /* no thermal mass: the temperature stays */
     }
     out->base_torque = tau_b;
     out->follower_torque = tau_f;

@@ -475,6 +475,8 @@ void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *st, const gs_rig_inp
     } else if (m->thermal_enabled) {
         gs_mesh_thermal_step(&st->block, r->thermal_gain, r->thermal_den, out->loss_power,
                              r->inv_thermal_resistance * in->ambient_temperature);
+    } else {
+        /* no thermal mass: the temperature stays */
     }
     out->base_speed = st->base_speed;
     out->base_angle = st->base_angle;
