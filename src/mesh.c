@@ -132,13 +132,11 @@ void gs_mesh_block_step(const gs_mesh_ *m, gs_block_state *st, gs_real dt, const
     const gs_real p_loss = p_mesh + m->mu_base * w_b * w_b + m->mu_follower * w_f * w_f + (f - f_spring) * u;
     if (in->use_temperature) {
         st->temperature = in->temperature;
-    } else if (m->thermal_enabled) {
+    } else {
         gs_real gain_K_W;
         gs_real den;
         gs_mesh_thermal_constants(m, dt, GS_R(0.0), &gain_K_W, &den); /* no ambient path */
-        gs_mesh_thermal_step(st, gain_K_W, den, p_loss + in->heat_flow, GS_R(0.0));
-    } else {
-        /* no thermal mass: the temperature stays */
+        gs_mesh_thermal_step(m, st, gain_K_W, den, p_loss + in->heat_flow, GS_R(0.0));
     }
     out->base_torque = tau_b;
     out->follower_torque = tau_f;

@@ -251,9 +251,12 @@ static inline void gs_mesh_thermal_constants(const gs_mesh_ *m, gs_real dt, gs_r
     *den = GS_R(1.0) + *gain_K_W * conductance_W_K;
 }
 
-static inline void gs_mesh_thermal_step(gs_block_state *st, gs_real gain_K_W, gs_real den, gs_real heat_W,
-                                        gs_real ambient_flow_W)
+static inline void gs_mesh_thermal_step(const gs_mesh_ *m, gs_block_state *st, gs_real gain_K_W, gs_real den,
+                                        gs_real heat_W, gs_real ambient_flow_W)
 {
+    if (!m->thermal_enabled) {
+        return; /* no thermal mass: the temperature stays */
+    }
     st->temperature = (st->temperature + gain_K_W * (heat_W + ambient_flow_W)) / den;
 }
 

@@ -472,11 +472,9 @@ void gs_rig_step(const gs_rig_consts *consts, gs_rig_state *st, const gs_rig_inp
     }
     if (from_input) {
         st->block.temperature = in->measured_temperature;
-    } else if (m->thermal_enabled) {
-        gs_mesh_thermal_step(&st->block, r->thermal_gain, r->thermal_den, out->loss_power,
-                             r->inv_thermal_resistance * in->ambient_temperature);
     } else {
-        /* no thermal mass: the temperature stays */
+        gs_mesh_thermal_step(m, &st->block, r->thermal_gain, r->thermal_den, out->loss_power,
+                             r->inv_thermal_resistance * in->ambient_temperature);
     }
     out->base_speed = st->base_speed;
     out->base_angle = st->base_angle;
